@@ -1,0 +1,135 @@
+# aqs -- adaptive quasi-statics. See README.md.
+#   make            build/libaqs.so.X.Y.Z and build/libaqs.a
+#   make check      every test (C, C++ reference, Python, install); SANITIZE=1 under ASan/UBSan
+#   make demo       the README's "run it" command
+#   make bench      the benchmark sweep (results in docs/bench/)
+#   make install    PREFIX=/usr/local DESTDIR=
+#   make deps       install the Debian/PyPI packages that are missing
+
+SHELL := /bin/bash
+PREFIX ?= /usr/local
+DESTDIR ?=
+PYTHON ?= python3
+
+MAJOR := $(shell sed -n 's/^\#define AQS_VERSION_MAJOR \([0-9]*\).*/\1/p' include/aqs.h)
+MINOR := $(shell sed -n 's/^\#define AQS_VERSION_MINOR \([0-9]*\).*/\1/p' include/aqs.h)
+PATCH := $(shell sed -n 's/^\#define AQS_VERSION_PATCH \([0-9]*\).*/\1/p' include/aqs.h)
+VERSION := $(MAJOR).$(MINOR).$(PATCH)
+
+ifeq ($(SANITIZE),1)
+BUILD := build/san
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+OPT := -O1 -g
+else
+BUILD := build
+SANFLAGS :=
+OPT := -O2 -g
+endif
+
+CC ?= cc
+CXX ?= c++
+WARN := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wno-unused-parameter
+CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden -DAQS_BUILDING_LIBRARY \
+              -Iinclude -Isrc $(SANFLAGS)
+CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
+CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude \
+                 -I/usr/include/eigen3 $(SANFLAGS)
+LDLIBS := -lm
+
+SRCS := $(sort $(wildcard src/*.c))
+OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
+SONAME := libaqs.so.$(MAJOR)
+SHLIB := $(BUILD)/libaqs.so.$(VERSION)
+STLIB := $(BUILD)/libaqs.a
+
+C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.c)))
+CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
+TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
+
+BENCH_SRCS := $(sort $(wildcard bench/*.c))
+
+.PHONY: all lib check check-c check-reference check-python check-install check-symbols \
+        deps demo bench install clean
+
+all: lib
+lib: $(SHLIB) $(STLIB)
+
+DEPS_STAMP := build/.deps-ok
+deps: $(DEPS_STAMP)
+$(DEPS_STAMP): tools/deps.sh
+	@bash tools/deps.sh
+	@mkdir -p build && touch $@
+
+$(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) include/aqs.h | $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_LIB) -c $< -o $@
+
+$(SHLIB): $(OBJS) src/aqs.map
+	$(CC) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=src/aqs.map -Wl,--no-undefined \
+	    $(SANFLAGS) -o $@ $(OBJS) $(LDLIBS)
+	ln -sf libaqs.so.$(VERSION) $(BUILD)/$(SONAME)
+	ln -sf $(SONAME) $(BUILD)/libaqs.so
+
+$(STLIB): $(OBJS)
+	rm -f $@
+	ar rcs $@ $(OBJS)
+
+# C unit tests link the static library so they can reach internal functions.
+$(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(STLIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_TEST) -Itests/support -o $@ $< $(TEST_SUPPORT) $(STLIB) -lcmocka $(LDLIBS)
+
+$(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
+
+check: check-symbols check-c check-reference check-python check-install
+	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
+
+check-symbols: $(SHLIB)
+	@bash tests/check_symbols.sh $(SHLIB) src/aqs.map
+
+check-c: $(C_TESTS)
+	@set -e; for t in $(C_TESTS); do echo "== $$t"; $$t; done
+
+check-reference: $(CXX_TESTS)
+	@set -e; for t in $(CXX_TESTS); do echo "== $$t"; AQS_VECTORS=$(abspath ../shared/vectors) $$t; done
+
+ifeq ($(SANITIZE),1)
+# Python loads the library into an uninstrumented interpreter: preload the runtime.
+PY_ENV := LD_PRELOAD="$$($(CC) -print-file-name=libasan.so) $$($(CC) -print-file-name=libubsan.so)" \
+          ASAN_OPTIONS=detect_leaks=0
+else
+PY_ENV :=
+endif
+check-python: $(SHLIB)
+	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
+	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
+
+check-install: lib
+	@bash tests/install/run.sh "$(BUILD)" "$(CC)" "$(CXX)" "$(SANFLAGS)"
+
+install: lib
+	install -d $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/lib/pkgconfig
+	install -m 644 include/aqs.h $(DESTDIR)$(PREFIX)/include/aqs.h
+	install -m 755 $(SHLIB) $(DESTDIR)$(PREFIX)/lib/libaqs.so.$(VERSION)
+	ln -sf libaqs.so.$(VERSION) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libaqs.so
+	install -m 644 $(STLIB) $(DESTDIR)$(PREFIX)/lib/libaqs.a
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(VERSION)|g' aqs.pc.in \
+	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/aqs.pc
+
+$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(filter-out bench/aqs_bench.c bench/demo.c,$(BENCH_SRCS)) $(STLIB)
+	@mkdir -p $(dir $@)
+	$(CC) -std=c99 -O2 -g $(WARN) -Iinclude -Ibench -o $@ $< \
+	    $(filter-out bench/aqs_bench.c bench/demo.c bench/exact_bench.c,$(BENCH_SRCS)) $(STLIB) $(LDLIBS)
+
+demo: $(BUILD)/bench/demo
+	@$(BUILD)/bench/demo
+
+bench: $(BUILD)/bench/exact_bench
+	@mkdir -p docs/bench
+	$(BUILD)/bench/exact_bench
+
+clean:
+	rm -rf build

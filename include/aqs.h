@@ -1,0 +1,298 @@
+/*
+ * aqs.h -- adaptive quasi-statics of large articulated linkages.
+ *
+ * The whole public C ABI of libaqs. C99 and C++ compatible.
+ *
+ * Conventions used throughout (see docs/api.md for the long form):
+ *  - Units are the caller's, consistent (SI suggested: kg, m, s, N, N m).
+ *  - Spatial vectors are 6-vectors, angular part first: a motion vector is
+ *    [omega; v_O], a force vector is [n_O; f] (moment about the frame origin O).
+ *  - Quaternions are (w, x, y, z), scalar first, unit length.
+ *  - Bodies and joints are named by int32_t indices, in the order they were
+ *    added, starting at 0. AQS_WORLD (-1) names the fixed world.
+ *  - Every fallible function returns an aqs_status: AQS_OK (0) or a negative
+ *    code. A failed call leaves the linkage exactly as it was, and
+ *    aqs_linkage_last_error() then names the argument and value that were
+ *    wrong. Nothing aborts, exits or prints.
+ *  - Non-finite inputs (NaN, +-Inf) are rejected with AQS_EINVAL.
+ *  - A linkage is used by one thread at a time; different linkages are
+ *    independent. There is no global mutable state.
+ */
+#ifndef AQS_H
+#define AQS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(AQS_BUILDING_LIBRARY) && defined(__GNUC__)
+#define AQS_API __attribute__((visibility("default")))
+#else
+#define AQS_API
+#endif
+
+/* ------------------------------------------------------------------------
+ * Version
+ * ---------------------------------------------------------------------- */
+
+#define AQS_VERSION_MAJOR 0
+#define AQS_VERSION_MINOR 1
+#define AQS_VERSION_PATCH 0
+/** The version as one number: MAJOR * 10000 + MINOR * 100 + PATCH. */
+#define AQS_VERSION_NUMBER \
+    (AQS_VERSION_MAJOR * 10000 + AQS_VERSION_MINOR * 100 + AQS_VERSION_PATCH)
+
+/** Version of the library actually linked, as AQS_VERSION_NUMBER. Compare it
+ *  with the header's AQS_VERSION_NUMBER to detect a mismatched build. */
+AQS_API int32_t aqs_version(void);
+
+/** Version of the linked library as a fixed string "MAJOR.MINOR.PATCH". */
+AQS_API const char *aqs_version_string(void);
+
+/* ------------------------------------------------------------------------
+ * Status codes (fixed values; never renumbered)
+ * ---------------------------------------------------------------------- */
+
+typedef int32_t aqs_status;
+
+#define AQS_OK 0        /**< success */
+#define AQS_EINVAL (-1) /**< an argument is invalid (NULL, non-finite, out of its domain) */
+#define AQS_ERANGE (-2) /**< a body or joint index is out of range */
+#define AQS_ESTATE (-3) /**< wrong phase: e.g. adding after finalize, solving before */
+#define AQS_ENOMEM (-4) /**< an allocation failed; the linkage is unchanged */
+#define AQS_EMODEL (-5) /**< finalize found the linkage invalid (topology, mass) */
+#define AQS_ENUMERIC (-6) /**< a numerical failure (singular articulated inertia) */
+#define AQS_ESIZE (-7)  /**< a caller's array is too small; nothing was written */
+
+/** A fixed, static text for a status code ("unknown status" for others). */
+AQS_API const char *aqs_status_string(aqs_status status);
+
+/* ------------------------------------------------------------------------
+ * Creation, allocation, errors
+ * ---------------------------------------------------------------------- */
+
+/** Opaque linkage handle. */
+typedef struct aqs_linkage aqs_linkage;
+
+/** Allocation callback: return size bytes aligned for any C type
+ *  (max_align_t), or NULL on failure. */
+typedef void *(*aqs_alloc_fn)(void *user, size_t size);
+/** Release callback for memory returned by the matching aqs_alloc_fn.
+ *  Never called with NULL. */
+typedef void (*aqs_free_fn)(void *user, void *ptr);
+
+/** Create an empty linkage using malloc/free.
+ *  out: receives the handle (non-NULL). Returns AQS_OK, AQS_EINVAL, AQS_ENOMEM. */
+AQS_API aqs_status aqs_linkage_create(aqs_linkage **out);
+
+/** Create an empty linkage whose memory all comes from alloc/free (both
+ *  non-NULL), called with user as their first argument. Returns AQS_OK,
+ *  AQS_EINVAL, AQS_ENOMEM. */
+AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_free_fn free_fn,
+                                                     void *user, aqs_linkage **out);
+
+/** Destroy a linkage and release all its memory. NULL is accepted. */
+AQS_API void aqs_linkage_destroy(aqs_linkage *linkage);
+
+/** The message of the last failed call on this linkage ("" if none): names
+ *  the function, the argument and the offending value. Valid until the next
+ *  call on the linkage. Never NULL (a NULL linkage gives a fixed text). */
+AQS_API const char *aqs_linkage_last_error(const aqs_linkage *linkage);
+
+/* ------------------------------------------------------------------------
+ * Building (only before aqs_linkage_finalize; AQS_ESTATE afterwards)
+ * ---------------------------------------------------------------------- */
+
+#define AQS_WORLD (-1) /**< the fixed world, as a joint's parent */
+
+/** Joint types (fixed values). Degrees of freedom (nq position values,
+ *  nv acceleration values) in parentheses. "u" and "v" are the joint frame
+ *  directions completing the axis a (see aqs_joint_add). */
+#define AQS_JOINT_REVOLUTE 0    /**< rotation by q about a (nq 1, nv 1) */
+#define AQS_JOINT_PRISMATIC 1   /**< translation by q along a (1, 1) */
+#define AQS_JOINT_SPHERICAL 2   /**< rotation by a unit quaternion (4, 3) */
+#define AQS_JOINT_FREE 3        /**< 6-dof floating base, world parent only (7, 6) */
+#define AQS_JOINT_FIXED 4       /**< welded: no motion (0, 0) */
+#define AQS_JOINT_UNIVERSAL 5   /**< rotation q1 about a, then q2 about the moved u (2, 2) */
+#define AQS_JOINT_CYLINDRICAL 6 /**< rotation q1 about a and translation q2 along a (2, 2) */
+#define AQS_JOINT_PLANAR 7      /**< translation q1 u + q2 v, then rotation q3 about a (3, 3) */
+
+/** Whether aqs_body_add requires physically realizable inertias: principal
+ *  moments obeying the triangle inequality (I1 + I2 >= I3), which every real
+ *  mass distribution has. physical: 1 (the default) or 0 (accept any
+ *  symmetric positive definite inertia, e.g. for synthetic test models).
+ *  Building phase only. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+AQS_API aqs_status aqs_linkage_set_inertia_check(aqs_linkage *linkage, int32_t physical);
+
+/** Add a rigid body.
+ *  mass: kg, finite, >= 0 (0 only for a body welded by fixed joints to a
+ *        massive body or to the world; checked at finalize).
+ *  com: (3) centre of mass in the body frame, m.
+ *  inertia: (3 x 3, row-major) rotational inertia about the centre of mass in
+ *        the body frame, kg m^2: symmetric (relative 1e-9), positive definite
+ *        (semi-definite if mass is 0), principal moments obeying the triangle
+ *        inequality (relative 1e-9) unless aqs_linkage_set_inertia_check(0).
+ *  out_body: receives the new body index (may be NULL).
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_body_add(aqs_linkage *linkage, double mass, const double com[3],
+                                const double inertia[9], int32_t *out_body);
+
+/** Add a joint from parent (a body index or AQS_WORLD) to child (a body index).
+ *  type: one of AQS_JOINT_*.
+ *  pos: (3) origin of the joint frame in the parent body frame (world frame for
+ *       AQS_WORLD), m. quat: (4, w x y z) orientation of the joint frame in the
+ *       parent frame; unit within 1e-6, then normalized.
+ *  axis: (3) direction a in the joint frame, non-zero, normalized on input.
+ *       Ignored (may be NULL) for spherical, free and fixed joints.
+ *  The child body frame coincides with the joint frame at q = 0 and is moved
+ *  from it by the joint position (URDF convention).
+ *  Second directions: with e the coordinate axis along which |a| has its
+ *  smallest component (the first such), u = normalize(e - (e.a) a) and
+ *  v = a x u, so (u, v, a) is right-handed; for a = z this is (x, y, z).
+ *  out_joint: receives the new joint index (may be NULL).
+ *  Topology (one parent joint per body, no cycles, connected, free joints
+ *  only from the world) is checked at finalize.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ESTATE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_joint_add(aqs_linkage *linkage, int32_t type, int32_t parent,
+                                 int32_t child, const double pos[3], const double quat[4],
+                                 const double axis[3], int32_t *out_joint);
+
+/** Validate the linkage and build the assembly tree and all coefficients.
+ *  Checks, reporting the first problem by body/joint index (AQS_EMODEL):
+ *  at least one body; each body the child of exactly one joint; every body
+ *  connected to the world (no cycles); free joints only from the world; every
+ *  rigid group formed by fixed joints with positive mass and a positive
+ *  definite inertia (unless welded to the world).
+ *  Returns AQS_OK, AQS_EMODEL, AQS_ESTATE (already finalized), AQS_ENOMEM,
+ *  AQS_ENUMERIC. On failure the linkage stays unfinalized and editable. */
+AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *linkage);
+
+/** Sizes. Any phase. Each out pointer may be NULL.
+ *  bodies, joints: counts as added; nq: position values; nv: acceleration
+ *  values (sums over all joints of the per-type sizes above). */
+AQS_API aqs_status aqs_linkage_get_sizes(const aqs_linkage *linkage, int32_t *bodies,
+                                         int32_t *joints, int32_t *nq, int32_t *nv);
+
+/** Offsets of joint j in the bulk position and acceleration arrays and its
+ *  sizes. Any phase. Each out pointer may be NULL.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
+AQS_API aqs_status aqs_joint_get_layout(const aqs_linkage *linkage, int32_t joint,
+                                        int32_t *q_offset, int32_t *nq, int32_t *v_offset,
+                                        int32_t *nv);
+
+/** Assembly tree statistics (after finalize). Each out pointer may be NULL.
+ *  nodes: tree nodes (leaves and internal); height: edges on the longest
+ *  root-to-leaf path; mean_handles, max_handles: over all nodes.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *linkage, int32_t *nodes,
+                                              int32_t *height, double *mean_handles,
+                                              int32_t *max_handles);
+
+/* ------------------------------------------------------------------------
+ * Loads (any phase; persistent until changed or cleared)
+ * ---------------------------------------------------------------------- */
+
+/** Gravitational acceleration, world frame, m/s^2 (default 0,0,0). */
+AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *linkage, const double gravity[3]);
+
+/** Set the external load on a body, replacing any earlier one.
+ *  force: (3) world frame, N, applied at point: (3) body frame, m (NULL = the
+ *  body origin). torque: (3) pure torque, world frame, N m (NULL = zero).
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
+AQS_API aqs_status aqs_body_set_force(aqs_linkage *linkage, int32_t body, const double force[3],
+                                      const double point[3], const double torque[3]);
+
+/** Remove the external load of one body. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
+AQS_API aqs_status aqs_body_clear_force(aqs_linkage *linkage, int32_t body);
+
+/** Remove every body load and every joint force. */
+AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *linkage);
+
+/** Active joint force Q, one value per dof (N for translations, N m for
+ *  rotations), in the same layout and frame as the joint's acceleration.
+ *  tau: (n), n must equal the joint's nv (n = 0 and tau = NULL for fixed
+ *  joints). Returns AQS_OK, AQS_EINVAL (n mismatch, non-finite), AQS_ERANGE. */
+AQS_API aqs_status aqs_joint_set_force(aqs_linkage *linkage, int32_t joint, const double *tau,
+                                       int32_t n);
+
+/* ------------------------------------------------------------------------
+ * Solving and stepping (after finalize)
+ * ---------------------------------------------------------------------- */
+
+/** Solve the quasi-statics at the current positions and loads: every joint
+ *  acceleration, the floating bases' accelerations, and every joint's
+ *  constraint force. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
+AQS_API aqs_status aqs_linkage_solve(aqs_linkage *linkage);
+
+/** Solve, then move every joint by q <- q (+) dt^2 * qdd (on the rotation
+ *  group for spherical and free joints: the increment is a rotation vector in
+ *  the child frame; a free joint's translation moves by its body-frame
+ *  increment rotated into the joint frame), then update the coefficients.
+ *  The accelerations and forces read afterwards are those of the solve at the
+ *  start of the step. dt: s, finite, > 0.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
+AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
+
+/* ------------------------------------------------------------------------
+ * Reading back and setting state
+ * ---------------------------------------------------------------------- */
+
+/** All joint positions in joint order. q: (n >= nq). Any phase.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESIZE. */
+AQS_API aqs_status aqs_linkage_get_positions(const aqs_linkage *linkage, double *q, size_t n);
+
+/** Set all joint positions. q: (n == nq), finite; quaternions unit within
+ *  1e-6 (normalized on input). Any phase. Returns AQS_OK, AQS_EINVAL, AQS_ESIZE. */
+AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *linkage, const double *q, size_t n);
+
+/** Position of one joint. q: (n == the joint's nq). */
+AQS_API aqs_status aqs_joint_get_position(const aqs_linkage *linkage, int32_t joint, double *q,
+                                          int32_t n);
+/** Set the position of one joint. q: (n == the joint's nq), as above. */
+AQS_API aqs_status aqs_joint_set_position(aqs_linkage *linkage, int32_t joint, const double *q,
+                                          int32_t n);
+
+/** All joint accelerations of the last solve, in joint order. qdd: (n >= nv).
+ *  Units m/s^2 or rad/s^2. Spherical: angular acceleration of the child
+ *  relative to the parent side, child frame. Free: the child's spatial
+ *  acceleration in its own body frame [dw; dv], gravity included.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE (no solve yet), AQS_ESIZE. */
+AQS_API aqs_status aqs_linkage_get_accelerations(const aqs_linkage *linkage, double *qdd,
+                                                 size_t n);
+
+/** Acceleration of one joint of the last solve. qdd: (n == the joint's nv). */
+AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *linkage, int32_t joint,
+                                              double *qdd, int32_t n);
+
+/** Constraint forces of the last solve: (joints x 6), row j the spatial force
+ *  joint j exerts on its child, in the child body frame about its origin,
+ *  torque first, [n; f] in N m and N. n >= 6 * joints.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ESIZE. */
+AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *linkage, double *f,
+                                                     size_t n);
+
+/** Constraint force of one joint: f (6), as above. */
+AQS_API aqs_status aqs_joint_get_constraint_force(const aqs_linkage *linkage, int32_t joint,
+                                                  double f[6]);
+
+/** World pose of one body at the current positions (after finalize), found
+ *  through the assembly tree's hierarchical frames in O(log N).
+ *  pos: (3) origin of the body frame, world frame. quat: (4, w x y z)
+ *  orientation. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ESTATE. */
+AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *linkage, int32_t body,
+                                           double pos[3], double quat[4]);
+
+/** World poses of all bodies in one O(N) pass. poses: (bodies x 7), row i =
+ *  x y z w qx qy qz of body i. n >= 7 * bodies.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ESIZE. */
+AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *linkage, double *poses,
+                                                    size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* AQS_H */

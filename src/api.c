@@ -1,0 +1,784 @@
+/* api.c -- the public entry points: argument checks, phases, status codes
+ * and error messages. The numerical work is in the other files. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "aqs.h"
+#include "assembly.h"
+#include "dca.h"
+#include "linkage.h"
+#include "model.h"
+#include "update.h"
+
+#define STR2(x) #x
+#define STR(x) STR2(x)
+
+AQS_API int32_t aqs_version(void) { return AQS_VERSION_NUMBER; }
+
+AQS_API const char *aqs_version_string(void)
+{
+    return STR(AQS_VERSION_MAJOR) "." STR(AQS_VERSION_MINOR) "." STR(AQS_VERSION_PATCH);
+}
+
+AQS_API const char *aqs_status_string(aqs_status status)
+{
+    switch (status) {
+    case AQS_OK: return "success";
+    case AQS_EINVAL: return "invalid argument";
+    case AQS_ERANGE: return "index out of range";
+    case AQS_ESTATE: return "operation not allowed in the linkage's current phase";
+    case AQS_ENOMEM: return "out of memory";
+    case AQS_EMODEL: return "invalid linkage";
+    case AQS_ENUMERIC: return "numerical failure";
+    case AQS_ESIZE: return "array too small";
+    default: return "unknown status";
+    }
+}
+
+aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(L->error, sizeof L->error, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+/* ---------------------------------------------------------------- helpers */
+
+static int finite_n(const double *v, int n, int *bad)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(v[i])) {
+            *bad = i;
+            return 0;
+        }
+    return 1;
+}
+
+#define CHECK_LINKAGE(L)                                                                       \
+    do {                                                                                       \
+        if (!(L)) return AQS_EINVAL;                                                           \
+    } while (0)
+
+#define CHECK_PTR(L, fn, p)                                                                    \
+    do {                                                                                       \
+        if (!(p)) return lk_fail((L), AQS_EINVAL, "%s: %s is NULL", fn, #p);                   \
+    } while (0)
+
+static aqs_status check_vec(aqs_linkage *L, const char *fn, const char *name, const double *v,
+                            int n)
+{
+    int bad;
+    if (!v) return lk_fail(L, AQS_EINVAL, "%s: %s is NULL", fn, name);
+    if (!finite_n(v, n, &bad))
+        return lk_fail(L, AQS_EINVAL, "%s: %s[%d] = %g is not finite", fn, name, bad, v[bad]);
+    return AQS_OK;
+}
+
+static aqs_status check_body(aqs_linkage *L, const char *fn, int32_t body)
+{
+    if (body < 0 || body >= L->nbodies)
+        return lk_fail(L, AQS_ERANGE, "%s: body = %d is out of range [0, %d)", fn, (int)body,
+                       (int)L->nbodies);
+    return AQS_OK;
+}
+
+static aqs_status check_joint(aqs_linkage *L, const char *fn, int32_t joint)
+{
+    if (joint < 0 || joint >= L->njoints)
+        return lk_fail(L, AQS_ERANGE, "%s: joint = %d is out of range [0, %d)", fn, (int)joint,
+                       (int)L->njoints);
+    return AQS_OK;
+}
+
+static aqs_status need_finalized(aqs_linkage *L, const char *fn)
+{
+    if (!L->finalized)
+        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    return AQS_OK;
+}
+
+static aqs_status need_building(aqs_linkage *L, const char *fn)
+{
+    if (L->finalized)
+        return lk_fail(L, AQS_ESTATE, "%s: the linkage is finalized; its bodies and joints are fixed", fn);
+    return AQS_OK;
+}
+
+static aqs_status need_solved(aqs_linkage *L, const char *fn)
+{
+    aqs_status st = need_finalized(L, fn);
+    if (st == AQS_OK && !L->solved)
+        return lk_fail(L, AQS_ESTATE, "%s: nothing solved yet (call aqs_linkage_solve or aqs_linkage_step)", fn);
+    return st;
+}
+
+/* Grow an array to cap elements: returns the new block or NULL. */
+static void *grown(aqs_linkage *L, const void *old, size_t used, size_t cap, size_t elem)
+{
+    void *p = lk_alloc(L, cap * elem);
+    if (p && used) memcpy(p, old, used * elem);
+    return p;
+}
+
+/* -------------------------------------------------------------- lifecycle */
+
+static void *default_alloc(void *user, size_t size) { (void)user; return malloc(size); }
+static void default_free(void *user, void *ptr) { (void)user; free(ptr); }
+
+AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_free_fn free_fn,
+                                                     void *user, aqs_linkage **out)
+{
+    aqs_linkage *L;
+    if (!alloc || !free_fn || !out) return AQS_EINVAL;
+    *out = NULL;
+    L = alloc(user, sizeof *L);
+    if (!L) return AQS_ENOMEM;
+    memset(L, 0, sizeof *L);
+    L->alloc = alloc;
+    L->free_fn = free_fn;
+    L->user = user;
+    L->t.root = -1;
+    *out = L;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_create(aqs_linkage **out)
+{
+    return aqs_linkage_create_with_allocator(default_alloc, default_free, NULL, out);
+}
+
+static void free_solver(aqs_linkage *L)
+{
+    assembly_free(L);
+    model_free(L);
+    lk_free(L, L->qdd);
+    lk_free(L, L->cforce);
+    lk_free(L, L->q_saved);
+    lk_free(L, L->welded_acc);
+    lk_free(L, L->body_world);
+    L->qdd = L->cforce = L->q_saved = L->welded_acc = NULL;
+    L->body_world = NULL;
+}
+
+AQS_API void aqs_linkage_destroy(aqs_linkage *L)
+{
+    if (!L) return;
+    free_solver(L);
+    lk_free(L, L->bodies);
+    lk_free(L, L->loads);
+    lk_free(L, L->load_slot);
+    lk_free(L, L->loaded_bodies);
+    lk_free(L, L->joints);
+    lk_free(L, L->q);
+    lk_free(L, L->tau);
+    L->free_fn(L->user, L);
+}
+
+AQS_API const char *aqs_linkage_last_error(const aqs_linkage *L)
+{
+    if (!L) return "aqs_linkage_last_error: linkage is NULL";
+    return L->error;
+}
+
+/* --------------------------------------------------------------- building */
+
+AQS_API aqs_status aqs_linkage_set_inertia_check(aqs_linkage *L, int32_t physical)
+{
+    static const char fn[] = "aqs_linkage_set_inertia_check";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    if (physical != 0 && physical != 1)
+        return lk_fail(L, AQS_EINVAL, "%s: physical = %d must be 0 or 1", fn, (int)physical);
+    L->lax_inertia = !physical;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_body_add(aqs_linkage *L, double mass, const double com[3],
+                                const double inertia[9], int32_t *out_body)
+{
+    static const char fn[] = "aqs_body_add";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, com);
+    CHECK_PTR(L, fn, inertia);
+    if ((st = model_check_body(L, fn, mass, com, inertia)) != AQS_OK) return st;
+    if (L->nbodies == INT32_MAX - 1) return lk_fail(L, AQS_ENOMEM, "%s: too many bodies", fn);
+    if (L->nbodies == L->body_cap) {
+        size_t cap = L->body_cap ? 2 * (size_t)L->body_cap : 16, n = (size_t)L->nbodies;
+        body_def *b;
+        body_load *ld;
+        int32_t *slot, *list;
+        if (cap > INT32_MAX) cap = INT32_MAX;
+        b = grown(L, L->bodies, n, cap, sizeof *b);
+        ld = grown(L, L->loads, n, cap, sizeof *ld);
+        slot = grown(L, L->load_slot, n, cap, sizeof *slot);
+        list = grown(L, L->loaded_bodies, (size_t)L->nloaded, cap, sizeof *list);
+        if (!b || !ld || !slot || !list) {
+            lk_free(L, b);
+            lk_free(L, ld);
+            lk_free(L, slot);
+            lk_free(L, list);
+            return lk_fail(L, AQS_ENOMEM, "%s: out of memory growing to %zu bodies", fn, cap);
+        }
+        lk_free(L, L->bodies);
+        lk_free(L, L->loads);
+        lk_free(L, L->load_slot);
+        lk_free(L, L->loaded_bodies);
+        L->bodies = b;
+        L->loads = ld;
+        L->load_slot = slot;
+        L->loaded_bodies = list;
+        L->body_cap = (int32_t)cap;
+    }
+    {
+        body_def *b = &L->bodies[L->nbodies];
+        int i, j;
+        b->mass = mass;
+        memcpy(b->com, com, sizeof b->com);
+        for (i = 0; i < 3; i++) /* store the symmetric part */
+            for (j = 0; j < 3; j++) b->inertia[3 * i + j] = 0.5 * (inertia[3 * i + j] + inertia[3 * j + i]);
+        memset(&L->loads[L->nbodies], 0, sizeof(body_load));
+        L->load_slot[L->nbodies] = -1;
+    }
+    if (out_body) *out_body = L->nbodies;
+    L->nbodies++;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, int32_t child,
+                                 const double pos[3], const double quat[4], const double axis[3],
+                                 int32_t *out_joint)
+{
+    static const char fn[] = "aqs_joint_add";
+    aqs_status st;
+    joint_def jd;
+    int nq, nv, i;
+    double qn, an = 0.0;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    if (type < 0 || type >= JOINT_TYPE_COUNT)
+        return lk_fail(L, AQS_EINVAL, "%s: type = %d is not an AQS_JOINT_* value", fn, (int)type);
+    if (parent != AQS_WORLD && (parent < 0 || parent >= L->nbodies))
+        return lk_fail(L, AQS_ERANGE, "%s: parent = %d is neither AQS_WORLD nor a body in [0, %d)",
+                       fn, (int)parent, (int)L->nbodies);
+    if (child < 0 || child >= L->nbodies)
+        return lk_fail(L, AQS_ERANGE, "%s: child = %d is out of range [0, %d)", fn, (int)child,
+                       (int)L->nbodies);
+    if (parent == child)
+        return lk_fail(L, AQS_EINVAL, "%s: parent = child = %d", fn, (int)child);
+    if (type == AQS_JOINT_FREE && parent != AQS_WORLD)
+        return lk_fail(L, AQS_EINVAL,
+                       "%s: a free joint must have parent AQS_WORLD, got parent = %d", fn, (int)parent);
+    if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK) return st;
+    if ((st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK) return st;
+    qn = sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
+    if (fabs(qn - 1.0) > 1e-6)
+        return lk_fail(L, AQS_EINVAL, "%s: quat has norm %.17g, not 1 (tolerance 1e-6)", fn, qn);
+    if (joint_uses_axis(type)) {
+        if ((st = check_vec(L, fn, "axis", axis, 3)) != AQS_OK) return st;
+        an = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+        if (!(an > 1e-12))
+            return lk_fail(L, AQS_EINVAL, "%s: axis = (%g, %g, %g) is zero", fn, axis[0], axis[1], axis[2]);
+    }
+    nq = joint_nq(type);
+    nv = joint_nv(type);
+    if (L->nq > INT32_MAX - 8 || L->njoints == INT32_MAX - 1)
+        return lk_fail(L, AQS_ENOMEM, "%s: too many joints", fn);
+    /* Reserve everything first so that a failure changes nothing. */
+    {
+        joint_def *nj = NULL;
+        double *nqa = NULL, *nta = NULL;
+        size_t jcap = (size_t)L->joint_cap, qcap = (size_t)L->q_cap, vcap = (size_t)L->v_cap;
+        if (L->njoints == L->joint_cap) {
+            jcap = jcap ? 2 * jcap : 16;
+            nj = grown(L, L->joints, (size_t)L->njoints, jcap, sizeof *nj);
+        }
+        if (L->nq + nq > L->q_cap) {
+            qcap = qcap ? 2 * qcap + (size_t)nq : 64;
+            nqa = grown(L, L->q, (size_t)L->nq, qcap, sizeof(double));
+        }
+        if (L->nv + nv > L->v_cap) {
+            vcap = vcap ? 2 * vcap + (size_t)nv : 64;
+            nta = grown(L, L->tau, (size_t)L->nv, vcap, sizeof(double));
+        }
+        if ((L->njoints == L->joint_cap && !nj) || (L->nq + nq > L->q_cap && !nqa) ||
+            (L->nv + nv > L->v_cap && !nta)) {
+            lk_free(L, nj);
+            lk_free(L, nqa);
+            lk_free(L, nta);
+            return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
+        }
+        if (nj) {
+            lk_free(L, L->joints);
+            L->joints = nj;
+            L->joint_cap = (int32_t)jcap;
+        }
+        if (nqa) {
+            lk_free(L, L->q);
+            L->q = nqa;
+            L->q_cap = (int32_t)qcap;
+        }
+        if (nta) {
+            lk_free(L, L->tau);
+            L->tau = nta;
+            L->v_cap = (int32_t)vcap;
+        }
+    }
+    memset(&jd, 0, sizeof jd);
+    jd.type = type;
+    jd.parent = parent;
+    jd.child = child;
+    memcpy(jd.pos, pos, sizeof jd.pos);
+    for (i = 0; i < 4; i++) jd.quat[i] = quat[i] / qn;
+    if (joint_uses_axis(type)) {
+        for (i = 0; i < 3; i++) jd.axis[i] = axis[i] / an;
+    } else {
+        jd.axis[2] = 1.0;
+    }
+    joint_directions(jd.axis, jd.u, jd.v);
+    jd.qoff = L->nq;
+    jd.voff = L->nv;
+    joint_zero_position(type, L->q + L->nq);
+    for (i = 0; i < nv; i++) L->tau[L->nv + i] = 0.0;
+    L->joints[L->njoints] = jd;
+    L->nq += nq;
+    L->nv += nv;
+    if (out_joint) *out_joint = L->njoints;
+    L->njoints++;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
+{
+    static const char fn[] = "aqs_linkage_finalize";
+    aqs_status st;
+    int32_t n;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    if ((st = model_build(L)) != AQS_OK) return st;
+    if ((st = assembly_build(L)) != AQS_OK) {
+        model_free(L);
+        return st;
+    }
+    L->qdd = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
+    L->cforce = lk_calloc(L, 6 * (size_t)L->njoints + 1, sizeof(double));
+    L->q_saved = lk_calloc(L, (size_t)L->nq + 1, sizeof(double));
+    L->welded_acc = lk_calloc(L, 6 * ((size_t)L->nbodies + L->m.ncomp + 2), sizeof(double));
+    L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
+    if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world) {
+        free_solver(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
+    }
+    for (n = 0; n < L->t.nnodes; n++)
+        if (L->t.nodes[n].joint < 0) {
+            update_leaf_poses(L, n);
+            dca_leaf_phi(L, n);
+        }
+    update_all_poses(L);
+    L->coeffs_dirty = L->loads_dirty = 1;
+    if ((st = update_coefficients(L)) != AQS_OK) {
+        free_solver(L);
+        return st;
+    }
+    L->finalized = 1;
+    L->solved = 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_sizes(const aqs_linkage *L, int32_t *bodies, int32_t *joints,
+                                         int32_t *nq, int32_t *nv)
+{
+    CHECK_LINKAGE(L);
+    if (bodies) *bodies = L->nbodies;
+    if (joints) *joints = L->njoints;
+    if (nq) *nq = L->nq;
+    if (nv) *nv = L->nv;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_get_layout(const aqs_linkage *cL, int32_t joint, int32_t *q_offset,
+                                        int32_t *nq, int32_t *v_offset, int32_t *nv)
+{
+    aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, "aqs_joint_get_layout", joint)) != AQS_OK) return st;
+    if (q_offset) *q_offset = L->joints[joint].qoff;
+    if (nq) *nq = joint_nq(L->joints[joint].type);
+    if (v_offset) *v_offset = L->joints[joint].voff;
+    if (nv) *nv = joint_nv(L->joints[joint].type);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *cL, int32_t *nodes,
+                                              int32_t *height, double *mean_handles,
+                                              int32_t *max_handles)
+{
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, "aqs_linkage_get_tree_stats")) != AQS_OK) return st;
+    if (nodes) *nodes = L->t.nnodes;
+    if (height) *height = L->t.height;
+    if (mean_handles) *mean_handles = L->t.mean_handles;
+    if (max_handles) *max_handles = L->t.max_handles;
+    return AQS_OK;
+}
+
+/* ------------------------------------------------------------------ loads */
+
+AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *L, const double gravity[3])
+{
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = check_vec(L, "aqs_linkage_set_gravity", "gravity", gravity, 3)) != AQS_OK) return st;
+    memcpy(L->gravity, gravity, sizeof L->gravity);
+    L->loads_dirty = 1;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_body_set_force(aqs_linkage *L, int32_t body, const double force[3],
+                                      const double point[3], const double torque[3])
+{
+    static const char fn[] = "aqs_body_set_force";
+    static const double zero[3] = {0, 0, 0};
+    aqs_status st;
+    body_load *ld;
+    CHECK_LINKAGE(L);
+    if ((st = check_body(L, fn, body)) != AQS_OK) return st;
+    if ((st = check_vec(L, fn, "force", force, 3)) != AQS_OK) return st;
+    if (point && (st = check_vec(L, fn, "point", point, 3)) != AQS_OK) return st;
+    if (torque && (st = check_vec(L, fn, "torque", torque, 3)) != AQS_OK) return st;
+    ld = &L->loads[body];
+    memcpy(ld->force, force, sizeof ld->force);
+    memcpy(ld->point, point ? point : zero, sizeof ld->point);
+    memcpy(ld->torque, torque ? torque : zero, sizeof ld->torque);
+    if (L->load_slot[body] < 0) {
+        L->load_slot[body] = L->nloaded;
+        L->loaded_bodies[L->nloaded++] = body;
+    }
+    L->loads_dirty = 1;
+    return AQS_OK;
+}
+
+static void remove_load(aqs_linkage *L, int32_t body)
+{
+    int32_t slot = L->load_slot[body], last;
+    if (slot < 0) return;
+    last = L->loaded_bodies[--L->nloaded];
+    L->loaded_bodies[slot] = last;
+    L->load_slot[last] = slot;
+    L->load_slot[body] = -1;
+    memset(&L->loads[body], 0, sizeof(body_load));
+    L->loads_dirty = 1;
+}
+
+AQS_API aqs_status aqs_body_clear_force(aqs_linkage *L, int32_t body)
+{
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = check_body(L, "aqs_body_clear_force", body)) != AQS_OK) return st;
+    remove_load(L, body);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *L)
+{
+    CHECK_LINKAGE(L);
+    while (L->nloaded > 0) remove_load(L, L->loaded_bodies[L->nloaded - 1]);
+    if (L->nv > 0) memset(L->tau, 0, sizeof(double) * (size_t)L->nv);
+    L->loads_dirty = 1;
+    L->coeffs_dirty = 1;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_set_force(aqs_linkage *L, int32_t joint, const double *tau, int32_t n)
+{
+    static const char fn[] = "aqs_joint_set_force";
+    aqs_status st;
+    int nv;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    nv = joint_nv(L->joints[joint].type);
+    if (n != nv)
+        return lk_fail(L, AQS_EINVAL, "%s: n = %d but joint %d (%s) has %d dofs", fn, (int)n,
+                       (int)joint, joint_type_name(L->joints[joint].type), nv);
+    if (nv == 0) return AQS_OK;
+    if ((st = check_vec(L, fn, "tau", tau, nv)) != AQS_OK) return st;
+    memcpy(L->tau + L->joints[joint].voff, tau, sizeof(double) * (size_t)nv);
+    L->coeffs_dirty = 1;
+    return AQS_OK;
+}
+
+/* ---------------------------------------------------------------- solving */
+
+static aqs_status check_outputs(aqs_linkage *L, const char *fn)
+{
+    int bad;
+    if (!finite_n(L->qdd, L->nv, &bad))
+        return lk_fail(L, AQS_ENUMERIC, "%s: acceleration %d came out non-finite", fn, bad);
+    if (!finite_n(L->cforce, 6 * L->njoints, &bad))
+        return lk_fail(L, AQS_ENUMERIC, "%s: constraint force of joint %d came out non-finite", fn, bad / 6);
+    return AQS_OK;
+}
+
+static aqs_status solve(aqs_linkage *L, const char *fn)
+{
+    aqs_status st;
+    int32_t n;
+    if ((st = update_coefficients(L)) != AQS_OK) return st;
+    for (n = L->t.nnodes - 1; n >= 0; n--)
+        if (L->t.nodes[n].joint >= 0) dca_node_backsub(L, n);
+    dca_welded_forces(L);
+    if ((st = check_outputs(L, fn)) != AQS_OK) {
+        L->solved = 0;
+        return st;
+    }
+    L->solved = 1;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
+{
+    static const char fn[] = "aqs_linkage_solve";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    return solve(L, fn);
+}
+
+AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
+{
+    static const char fn[] = "aqs_linkage_step";
+    aqs_status st;
+    int32_t e;
+    double h;
+    int bad;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if (!isfinite(dt) || !(dt > 0.0))
+        return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
+    if ((st = solve(L, fn)) != AQS_OK) return st;
+    h = dt * dt;
+    memcpy(L->q_saved, L->q, sizeof(double) * (size_t)L->nq);
+    for (e = 0; e < L->m.ne; e++) {
+        const joint_def *jd = &L->joints[L->m.eff_joint[e]];
+        joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
+    }
+    st = finite_n(L->q, L->nq, &bad) ? AQS_OK
+                                      : lk_fail(L, AQS_ENUMERIC, "%s: position %d became non-finite", fn, bad);
+    if (st == AQS_OK) {
+        update_all_poses(L);
+        L->coeffs_dirty = L->loads_dirty = 1; /* world-frame loads re-expressed */
+        st = update_coefficients(L);
+    }
+    if (st != AQS_OK) {
+        /* Undo: back to the positions before the step, which solved fine. */
+        char msg[sizeof L->error];
+        memcpy(msg, L->error, sizeof msg);
+        memcpy(L->q, L->q_saved, sizeof(double) * (size_t)L->nq);
+        update_all_poses(L);
+        L->coeffs_dirty = L->loads_dirty = 1;
+        (void)update_coefficients(L);
+        memcpy(L->error, msg, sizeof msg);
+    }
+    return st;
+}
+
+/* ---------------------------------------------------------------- reading */
+
+AQS_API aqs_status aqs_linkage_get_positions(const aqs_linkage *cL, double *q, size_t n)
+{
+    static const char fn[] = "aqs_linkage_get_positions";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, q);
+    if (n < (size_t)L->nq)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
+    if (L->nq) memcpy(q, L->q, sizeof(double) * (size_t)L->nq);
+    return AQS_OK;
+}
+
+/* Validate the position values of joint j (nq of them) into out. */
+static aqs_status check_joint_position(aqs_linkage *L, const char *fn, int32_t j, const double *q,
+                                       double *out)
+{
+    int r = joint_check_position(L->joints[j].type, q, out);
+    if (r > 0)
+        return lk_fail(L, AQS_EINVAL, "%s: position value %d of joint %d is %g, not finite", fn,
+                       r - 1, (int)j, q[r - 1]);
+    if (r < 0)
+        return lk_fail(L, AQS_EINVAL, "%s: the quaternion of joint %d is not unit (tolerance 1e-6)",
+                       fn, (int)j);
+    return AQS_OK;
+}
+
+static void positions_changed(aqs_linkage *L, int32_t joint)
+{
+    if (!L->finalized) return;
+    if (joint < 0) update_all_poses(L);
+    else if (L->m.eff_of_joint[joint] >= 0) update_poses_from_joint(L, L->m.eff_of_joint[joint]);
+    L->coeffs_dirty = 1;
+    L->loads_dirty = 1;
+}
+
+AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, size_t n)
+{
+    static const char fn[] = "aqs_linkage_set_positions";
+    aqs_status st;
+    int32_t j;
+    double tmp[8];
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, q);
+    if (n != (size_t)L->nq)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
+    for (j = 0; j < L->njoints; j++)
+        if ((st = check_joint_position(L, fn, j, q + L->joints[j].qoff, tmp)) != AQS_OK) return st;
+    for (j = 0; j < L->njoints; j++)
+        check_joint_position(L, fn, j, q + L->joints[j].qoff, L->q + L->joints[j].qoff);
+    positions_changed(L, -1);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_get_position(const aqs_linkage *cL, int32_t joint, double *q, int32_t n)
+{
+    static const char fn[] = "aqs_joint_get_position";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    int nq;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    nq = joint_nq(L->joints[joint].type);
+    if (n != nq)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %d but joint %d has nq = %d", fn, (int)n, (int)joint, nq);
+    if (nq == 0) return AQS_OK;
+    CHECK_PTR(L, fn, q);
+    memcpy(q, L->q + L->joints[joint].qoff, sizeof(double) * (size_t)nq);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_set_position(aqs_linkage *L, int32_t joint, const double *q, int32_t n)
+{
+    static const char fn[] = "aqs_joint_set_position";
+    aqs_status st;
+    int nq;
+    double tmp[8];
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    nq = joint_nq(L->joints[joint].type);
+    if (n != nq)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %d but joint %d has nq = %d", fn, (int)n, (int)joint, nq);
+    if (nq == 0) return AQS_OK;
+    CHECK_PTR(L, fn, q);
+    if ((st = check_joint_position(L, fn, joint, q, tmp)) != AQS_OK) return st;
+    memcpy(L->q + L->joints[joint].qoff, tmp, sizeof(double) * (size_t)nq);
+    positions_changed(L, joint);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_accelerations(const aqs_linkage *cL, double *qdd, size_t n)
+{
+    static const char fn[] = "aqs_linkage_get_accelerations";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, qdd);
+    if (n < (size_t)L->nv)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nv = %d", fn, n, (int)L->nv);
+    if (L->nv) memcpy(qdd, L->qdd, sizeof(double) * (size_t)L->nv);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *cL, int32_t joint, double *qdd,
+                                              int32_t n)
+{
+    static const char fn[] = "aqs_joint_get_acceleration";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    int nv;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    nv = joint_nv(L->joints[joint].type);
+    if (n != nv)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %d but joint %d has nv = %d", fn, (int)n, (int)joint, nv);
+    if (nv == 0) return AQS_OK;
+    CHECK_PTR(L, fn, qdd);
+    memcpy(qdd, L->qdd + L->joints[joint].voff, sizeof(double) * (size_t)nv);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *cL, double *f, size_t n)
+{
+    static const char fn[] = "aqs_linkage_get_constraint_forces";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, f);
+    if (n < 6 * (size_t)L->njoints)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 6 * joints = %d", fn, n, 6 * (int)L->njoints);
+    memcpy(f, L->cforce, sizeof(double) * 6 * (size_t)L->njoints);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_get_constraint_force(const aqs_linkage *cL, int32_t joint, double f[6])
+{
+    static const char fn[] = "aqs_joint_get_constraint_force";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, f);
+    memcpy(f, L->cforce + 6 * (size_t)joint, 6 * sizeof(double));
+    return AQS_OK;
+}
+
+static void write_pose(const pose *P, double pos[3], double quat[4])
+{
+    memcpy(pos, P->p, 3 * sizeof(double));
+    rot_to_quat(P->R, quat);
+}
+
+AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *cL, int32_t body, double pos[3],
+                                           double quat[4])
+{
+    static const char fn[] = "aqs_body_get_pose_world";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    pose P;
+    CHECK_LINKAGE(L);
+    if ((st = check_body(L, fn, body)) != AQS_OK) return st;
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, pos);
+    CHECK_PTR(L, fn, quat);
+    update_body_pose_world(L, body, &P);
+    write_pose(&P, pos, quat);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, double *poses, size_t n)
+{
+    static const char fn[] = "aqs_linkage_get_body_poses_world";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    int32_t b;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, poses);
+    if (n < 7 * (size_t)L->nbodies)
+        return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);
+    update_all_body_poses_world(L, L->body_world);
+    for (b = 0; b < L->nbodies; b++) write_pose(&L->body_world[b], poses + 7 * b, poses + 7 * b + 3);
+    return AQS_OK;
+}

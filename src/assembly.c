@@ -1,0 +1,279 @@
+/* assembly.c -- building the assembly tree by tree contraction.
+ *
+ * Vertices are the composites and the world (index ncomp); edges are the
+ * effective joints. Every vertex starts as a leaf cluster whose handles are
+ * its incident joints (for a composite: its parent joint first). Rounds of
+ * merges follow until one cluster is left: a cluster with one handle is
+ * raked into its neighbour, and two adjacent clusters with two handles each
+ * are compressed; a cluster takes part in at most one merge per round. A
+ * constant fraction of the clusters disappears per round, so the height is
+ * O(log N), and a merged cluster never has more handles than the larger
+ * part, so handles stay bounded by the largest body degree. */
+#include "assembly.h"
+
+#include <string.h>
+
+#include "pool.h"
+
+typedef struct {
+    aqs_linkage *L;
+    int32_t *hv; /* handle lists of all nodes */
+    int64_t nhv, cap;
+    int32_t *uf, *uf_node; /* union-find over vertices; cluster node of each root */
+    int32_t nnodes;
+} builder;
+
+static int32_t find(builder *B, int32_t v)
+{
+    int32_t r = v;
+    while (B->uf[r] != r) r = B->uf[r];
+    while (B->uf[v] != r) {
+        int32_t nx = B->uf[v];
+        B->uf[v] = r;
+        v = nx;
+    }
+    return r;
+}
+
+static int reserve_handles(builder *B, int64_t extra)
+{
+    int32_t *nh;
+    int64_t cap = B->cap;
+    if (B->nhv + extra <= B->cap) return 0;
+    while (cap < B->nhv + extra) cap = cap * 2 + 16;
+    nh = lk_alloc(B->L, (size_t)cap * sizeof(int32_t));
+    if (!nh) return -1;
+    if (B->nhv) memcpy(nh, B->hv, (size_t)B->nhv * sizeof(int32_t));
+    lk_free(B->L, B->hv);
+    B->hv = nh;
+    B->cap = cap;
+    return 0;
+}
+
+/* The cluster on the other side of effective joint e from cluster c. */
+static int32_t across(builder *B, int32_t c, int32_t e)
+{
+    const model *m = &B->L->m;
+    int32_t np = B->uf_node[find(B, m->eff_parent[e])];
+    int32_t nc = B->uf_node[find(B, m->eff_child[e])];
+    return np == c ? nc : np;
+}
+
+/* Merge clusters n1 and n2 across joint e into a new node. */
+static int merge(builder *B, int32_t n1, int32_t n2, int32_t e, int32_t *stamp, int32_t round)
+{
+    aqs_linkage *L = B->L;
+    const model *m = &L->m;
+    node *nodes = L->t.nodes;
+    int32_t rp = find(B, m->eff_parent[e]), rc = find(B, m->eff_child[e]);
+    int32_t a = B->uf_node[rp] == n1 ? n1 : n2, b = a == n1 ? n2 : n1;
+    int32_t id = B->nnodes, i, nh = nodes[a].nh + nodes[b].nh - 2;
+    node *C = &nodes[id];
+    if (reserve_handles(B, nh) != 0) return -1;
+    memset(C, 0, sizeof *C);
+    C->a = a;
+    C->b = b;
+    C->parent = -1;
+    C->joint = e;
+    C->comp = -1;
+    C->nh = nh;
+    C->d = joint_nv(L->joints[m->eff_joint[e]].type);
+    C->handles = B->nhv;
+    C->height = 1 + (nodes[a].height > nodes[b].height ? nodes[a].height : nodes[b].height);
+    for (i = 0; i < nodes[a].nh; i++) {
+        int32_t h = B->hv[nodes[a].handles + i];
+        if (h == e) C->ka = i;
+        else B->hv[B->nhv++] = h;
+    }
+    for (i = 0; i < nodes[b].nh; i++) {
+        int32_t h = B->hv[nodes[b].handles + i];
+        if (h == e) C->kb = i;
+        else B->hv[B->nhv++] = h;
+    }
+    nodes[a].parent = id;
+    nodes[b].parent = id;
+    B->uf[rc] = rp;
+    B->uf_node[rp] = id;
+    B->nnodes++;
+    stamp[a] = stamp[b] = stamp[id] = round; /* one merge per cluster and round */
+    return 0;
+}
+
+static aqs_status contract(builder *B, int32_t nvert)
+{
+    aqs_linkage *L = B->L;
+    node *nodes = L->t.nodes;
+    int32_t *live = NULL, *next = NULL, *stamp = NULL;
+    int32_t nlive = nvert, round = 0, i, k;
+    aqs_status st = AQS_OK;
+    live = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
+    next = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
+    stamp = lk_calloc(L, (size_t)B->L->t.nnodes, sizeof(int32_t));
+    if (!live || !next || !stamp) {
+        st = AQS_ENOMEM;
+        goto done;
+    }
+    for (i = 0; i < nvert; i++) live[i] = i;
+    while (nlive > 1) {
+        int32_t nnext = 0, first_new = B->nnodes;
+        round++;
+        /* rake */
+        for (k = 0; k < nlive; k++) {
+            int32_t c = live[k], n, e;
+            if (stamp[c] == round || nodes[c].nh != 1) continue;
+            e = B->hv[nodes[c].handles];
+            n = across(B, c, e);
+            if (stamp[n] == round) continue;
+            if (merge(B, c, n, e, stamp, round) != 0) {
+                st = AQS_ENOMEM;
+                goto done;
+            }
+        }
+        /* compress */
+        for (k = 0; k < nlive; k++) {
+            int32_t c = live[k], h;
+            if (stamp[c] == round || nodes[c].nh != 2) continue;
+            for (h = 0; h < 2; h++) {
+                int32_t e = B->hv[nodes[c].handles + h], n = across(B, c, e);
+                if (stamp[n] == round || nodes[n].nh != 2) continue;
+                if (merge(B, c, n, e, stamp, round) != 0) {
+                    st = AQS_ENOMEM;
+                    goto done;
+                }
+                break;
+            }
+        }
+        for (k = 0; k < nlive; k++)
+            if (stamp[live[k]] != round) next[nnext++] = live[k];
+        for (i = first_new; i < B->nnodes; i++) next[nnext++] = i;
+        memcpy(live, next, (size_t)nnext * sizeof(int32_t));
+        nlive = nnext;
+    }
+    L->t.root = live[0];
+done:
+    lk_free(L, live);
+    lk_free(L, next);
+    lk_free(L, stamp);
+    return st;
+}
+
+void assembly_free(aqs_linkage *L)
+{
+    tree *t = &L->t;
+    lk_free(L, t->nodes);
+    lk_free(L, t->handles);
+    lk_free(L, t->poses);
+    lk_free(L, t->data);
+    lk_free(L, t->node_of_eff);
+    lk_free(L, t->leaf_of_comp);
+    lk_free(L, t->scratch);
+    memset(t, 0, sizeof *t);
+    t->root = -1;
+}
+
+/* Offsets of every node's pooled arrays. */
+static void layout(tree *t)
+{
+    int32_t i;
+    t->ndata = 0;
+    t->nposes = 0;
+    for (i = 0; i < t->nnodes; i++) {
+        node *n = &t->nodes[i];
+        int64_t h = n->nh;
+        n->poses = pool_take(&t->nposes, h);
+        n->phi = pool_take(&t->ndata, 36 * h * h);
+        n->bv = pool_take(&t->ndata, 6 * h);
+        n->xf = pool_take(&t->ndata, 6 * h);
+        if (n->joint >= 0) {
+            n->M = pool_take(&t->ndata, 36 * h);
+            n->X = pool_take(&t->ndata, 36);
+            n->W = pool_take(&t->ndata, 36);
+            n->U = pool_take(&t->ndata, 6 * n->d);
+            n->rho = pool_take(&t->ndata, n->d);
+            n->gamma = pool_take(&t->ndata, 6);
+            n->S = pool_take(&t->ndata, 6 * n->d);
+        }
+    }
+}
+
+aqs_status assembly_build(aqs_linkage *L)
+{
+    const model *m = &L->m;
+    tree *t = &L->t;
+    builder B;
+    int32_t nvert = m->ncomp + 1, i, e;
+    int32_t *cursor = NULL;
+    int64_t total_h = 0;
+    aqs_status st = AQS_ENOMEM;
+    memset(t, 0, sizeof *t);
+    memset(&B, 0, sizeof B);
+    B.L = L;
+    t->root = -1;
+    t->nnodes = nvert + m->ne;
+    t->nodes = lk_calloc(L, (size_t)t->nnodes, sizeof(node));
+    t->node_of_eff = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    t->leaf_of_comp = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
+    B.uf = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
+    B.uf_node = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
+    cursor = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
+    if (!t->nodes || !t->node_of_eff || !t->leaf_of_comp || !B.uf || !B.uf_node || !cursor ||
+        reserve_handles(&B, 2 * (int64_t)m->ne) != 0)
+        goto fail;
+    /* Leaves: handle counts, then lists (a composite's parent joint first). */
+    for (e = 0; e < m->ne; e++) {
+        t->nodes[m->eff_parent[e]].nh++;
+        t->nodes[m->eff_child[e]].nh++;
+    }
+    for (i = 0; i < nvert; i++) {
+        node *n = &t->nodes[i];
+        n->a = n->b = n->parent = n->joint = -1;
+        n->comp = i;
+        n->handles = B.nhv;
+        B.nhv += n->nh;
+        cursor[i] = (int32_t)(n->handles + (i < m->ncomp ? 1 : 0));
+        B.uf[i] = i;
+        B.uf_node[i] = i;
+        t->leaf_of_comp[i] = i;
+    }
+    for (e = 0; e < m->ne; e++) {
+        B.hv[t->nodes[m->eff_child[e]].handles] = e;
+        B.hv[cursor[m->eff_parent[e]]++] = e;
+    }
+    B.nnodes = nvert;
+    if (m->ne > 0) {
+        st = contract(&B, nvert);
+        if (st != AQS_OK) goto fail;
+    } else {
+        t->nnodes = 0; /* everything is welded to the world: nothing moves */
+    }
+    t->handles = B.hv;
+    t->nhandles = B.nhv;
+    B.hv = NULL;
+    t->height = 0;
+    t->max_handles = 0;
+    for (i = 0; i < t->nnodes; i++) {
+        node *n = &t->nodes[i];
+        if (n->joint >= 0) t->node_of_eff[n->joint] = i;
+        if (n->nh > t->max_handles) t->max_handles = n->nh;
+        total_h += n->nh;
+    }
+    if (t->nnodes > 0) t->height = t->nodes[t->root].height;
+    t->mean_handles = t->nnodes > 0 ? (double)total_h / t->nnodes : 0.0;
+    layout(t);
+    t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
+    t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
+    t->scratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 2), sizeof(double));
+    if (!t->poses || !t->data || !t->scratch) goto fail;
+    lk_free(L, B.uf);
+    lk_free(L, B.uf_node);
+    lk_free(L, cursor);
+    return AQS_OK;
+fail:
+    lk_free(L, B.hv);
+    lk_free(L, B.uf);
+    lk_free(L, B.uf_node);
+    lk_free(L, cursor);
+    assembly_free(L);
+    (void)st;
+    return lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory building the assembly tree");
+}

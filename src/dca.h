@@ -1,0 +1,24 @@
+/* dca.h -- articulated-body coefficients of the assembly tree's nodes and the
+ * exact back-substitution (MATH.md §3). */
+#ifndef AQS_DCA_H
+#define AQS_DCA_H
+
+#include "linkage.h"
+
+/* Leaf Phi (constant after finalize; the world leaf's is zero). */
+void dca_leaf_phi(aqs_linkage *L, int32_t n);
+/* Leaf b from the composite's external load (world leaf: from gravity). */
+void dca_leaf_b(aqs_linkage *L, int32_t n);
+/* Internal node: X, W, U, rho, gamma, S, M, Phi, b from its children and
+ * the principal joint's position and force. Returns 0, or -1 when the
+ * articulated inertia is numerically singular. */
+int dca_node_update(aqs_linkage *L, int32_t n);
+/* Internal node: from its handle forces x, the principal joint's
+ * acceleration and constraint force (written to L->qdd / L->cforce) and
+ * the children's handle forces. */
+void dca_node_backsub(aqs_linkage *L, int32_t n);
+/* Constraint forces of the fixed joints inside every rigid group, from the
+ * leaves' handle forces (after a complete back-substitution). */
+void dca_welded_forces(aqs_linkage *L);
+
+#endif

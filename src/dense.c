@@ -1,0 +1,170 @@
+/* dense.c -- small dense kernels. */
+#include "dense.h"
+
+#include <math.h>
+#include <string.h>
+
+void dense_mul(const double *A, const double *B, double *C, int m, int k, int n)
+{
+    int i, j, l;
+    for (i = 0; i < m; i++) {
+        double *c = C + (long)i * n;
+        for (j = 0; j < n; j++) c[j] = 0.0;
+        for (l = 0; l < k; l++) {
+            double a = A[(long)i * k + l];
+            const double *b = B + (long)l * n;
+            for (j = 0; j < n; j++) c[j] += a * b[j];
+        }
+    }
+}
+
+void dense_mul_tn(const double *A, const double *B, double *C, int m, int k, int n)
+{
+    int i, j, l;
+    for (i = 0; i < m * n; i++) C[i] = 0.0;
+    for (l = 0; l < k; l++) {
+        const double *b = B + (long)l * n;
+        for (i = 0; i < m; i++) {
+            double a = A[(long)l * m + i];
+            double *c = C + (long)i * n;
+            for (j = 0; j < n; j++) c[j] += a * b[j];
+        }
+    }
+}
+
+void dense_mul_nt(const double *A, const double *B, double *C, int m, int k, int n)
+{
+    int i, j, l;
+    for (i = 0; i < m; i++) {
+        const double *a = A + (long)i * k;
+        for (j = 0; j < n; j++) {
+            const double *b = B + (long)j * k;
+            double s = 0.0;
+            for (l = 0; l < k; l++) s += a[l] * b[l];
+            C[(long)i * n + j] = s;
+        }
+    }
+}
+
+void dense_matvec(const double *A, const double *x, double *y, int m, int n)
+{
+    int i, j;
+    for (i = 0; i < m; i++) {
+        double s = 0.0;
+        for (j = 0; j < n; j++) s += A[(long)i * n + j] * x[j];
+        y[i] = s;
+    }
+}
+
+void dense_tmatvec(const double *A, const double *x, double *y, int m, int n)
+{
+    int i, j;
+    for (j = 0; j < n; j++) y[j] = 0.0;
+    for (i = 0; i < m; i++)
+        for (j = 0; j < n; j++) y[j] += A[(long)i * n + j] * x[i];
+}
+
+void dense_symmetrize(double *A, int n)
+{
+    int i, j;
+    for (i = 0; i < n; i++)
+        for (j = i + 1; j < n; j++) {
+            double s = 0.5 * (A[i * n + j] + A[j * n + i]);
+            A[i * n + j] = s;
+            A[j * n + i] = s;
+        }
+}
+
+/* In-place lower Cholesky factor; 0 on success, -1 at a non-positive pivot. */
+static int cholesky(double *L, int n)
+{
+    int i, j, k;
+    for (j = 0; j < n; j++) {
+        double d = L[j * n + j];
+        for (k = 0; k < j; k++) d -= L[j * n + k] * L[j * n + k];
+        if (!(d > 0.0)) return -1;
+        d = sqrt(d);
+        L[j * n + j] = d;
+        for (i = j + 1; i < n; i++) {
+            double s = L[i * n + j];
+            for (k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
+            L[i * n + j] = s / d;
+        }
+    }
+    return 0;
+}
+
+static int inverse_cholesky(const double *A, double *out, int n)
+{
+    double L[36], Linv[36];
+    int i, j, k;
+    memcpy(L, A, sizeof(double) * n * n);
+    if (cholesky(L, n) != 0) return -1;
+    /* Linv = L^{-1} (lower), then out = Linv^T Linv. */
+    for (i = 0; i < n * n; i++) Linv[i] = 0.0;
+    for (j = 0; j < n; j++) {
+        Linv[j * n + j] = 1.0 / L[j * n + j];
+        for (i = j + 1; i < n; i++) {
+            double s = 0.0;
+            for (k = j; k < i; k++) s -= L[i * n + k] * Linv[k * n + j];
+            Linv[i * n + j] = s / L[i * n + i];
+        }
+    }
+    for (i = 0; i < n; i++)
+        for (j = 0; j <= i; j++) {
+            double s = 0.0;
+            for (k = i; k < n; k++) s += Linv[k * n + i] * Linv[k * n + j];
+            out[i * n + j] = s;
+            out[j * n + i] = s;
+        }
+    return 0;
+}
+
+static int inverse_lu(const double *A, double *out, int n)
+{
+    double M[36], I[36];
+    int i, j, k;
+    memcpy(M, A, sizeof(double) * n * n);
+    for (i = 0; i < n * n; i++) I[i] = 0.0;
+    for (i = 0; i < n; i++) I[i * n + i] = 1.0;
+    for (k = 0; k < n; k++) {
+        int piv = k;
+        double best = fabs(M[k * n + k]);
+        for (i = k + 1; i < n; i++)
+            if (fabs(M[i * n + k]) > best) {
+                best = fabs(M[i * n + k]);
+                piv = i;
+            }
+        if (!(best > 0.0)) return -1;
+        if (piv != k)
+            for (j = 0; j < n; j++) {
+                double t = M[k * n + j];
+                M[k * n + j] = M[piv * n + j];
+                M[piv * n + j] = t;
+                t = I[k * n + j];
+                I[k * n + j] = I[piv * n + j];
+                I[piv * n + j] = t;
+            }
+        for (i = 0; i < n; i++) {
+            double f;
+            if (i == k) continue;
+            f = M[i * n + k] / M[k * n + k];
+            if (f == 0.0) continue;
+            for (j = k; j < n; j++) M[i * n + j] -= f * M[k * n + j];
+            for (j = 0; j < n; j++) I[i * n + j] -= f * I[k * n + j];
+        }
+    }
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++) out[i * n + j] = I[i * n + j] / M[i * n + i];
+    dense_symmetrize(out, n);
+    return 0;
+}
+
+int dense_spd_inverse(const double *A, double *out, int n)
+{
+    int i;
+    if (inverse_cholesky(A, out, n) != 0 && inverse_lu(A, out, n) != 0) return -1;
+    for (i = 0; i < n * n; i++)
+        if (!isfinite(out[i])) return -1;
+    return 0;
+}

@@ -1,0 +1,125 @@
+/* linkage.h -- the private layout of aqs_linkage, shared by the src/ files.
+ * Never installed. */
+#ifndef AQS_LINKAGE_H
+#define AQS_LINKAGE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "aqs.h"
+#include "joint.h"
+#include "spatial.h"
+
+typedef struct {
+    double mass, com[3], inertia[9];
+} body_def;
+
+/* A persistent external load: force (world) at point (body frame) + torque (world). */
+typedef struct {
+    double force[3], point[3], torque[3];
+} body_load;
+
+/* One node of the assembly tree (MATH.md §3.2, §10). Offsets index the
+ * pooled arrays of the tree. */
+typedef struct {
+    int32_t a, b, parent; /* children (-1 for leaves), parent (-1 for the root) */
+    int32_t joint;        /* principal joint (effective index); -1 for leaves */
+    int32_t comp;         /* leaves: rigid group (model.ncomp = world); -1 otherwise */
+    int32_t nh;           /* number of handles */
+    int32_t ka, kb;       /* position of the principal joint among A's / B's handles */
+    int32_t height;       /* leaves 0 */
+    int32_t d;            /* dofs of the principal joint */
+    int64_t handles;      /* nh effective joint indices, in tree.handles */
+    int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
+    int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
+    int64_t M;            /* [Phi^A_ok X^T; -Phi^B_ok] (6nh x 6) */
+    int64_t X;            /* motion transform from k's joint frame to its child frame */
+    int64_t W, U, rho, gamma, S; /* §3.4: W (6x6), U (d x 6), rho (d), gamma (6), S (6 x d) */
+} node;
+
+typedef struct {
+    int32_t nnodes, root;
+    node *nodes;
+    int32_t *handles;
+    int64_t nhandles;
+    pose *poses;
+    int64_t nposes;
+    double *data;
+    int64_t ndata;
+    int32_t *node_of_eff;  /* ne: the node whose principal joint it is */
+    int32_t *leaf_of_comp; /* ncomp + 1 */
+    int32_t height, max_handles;
+    double mean_handles;
+    double *scratch; /* 36 * max_handles doubles */
+} tree;
+
+/* What finalize derives from the user's bodies and joints: rigid groups
+ * (bodies welded by fixed joints, "composites") and the effective joints. */
+typedef struct {
+    int32_t ncomp;          /* composites; index ncomp is the world */
+    int32_t *comp_of_body;  /* nbodies */
+    pose *body_in_comp;     /* nbodies: body frame in its composite's frame */
+    int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
+    double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame */
+    double *comp_inverse;   /* ncomp x 36 */
+    double *comp_force;     /* (ncomp + 1) x 6: external load, composite frame */
+    unsigned char *comp_loaded; /* ncomp + 1 */
+    int32_t *loaded_comps;  /* comps whose comp_force is non-zero */
+    int32_t nloaded_comps;
+    int32_t ne;             /* effective (non-fixed) joints */
+    int32_t *eff_joint;     /* ne: user joint index */
+    int32_t *eff_of_joint;  /* njoints: effective index or -1 for fixed joints */
+    int32_t *eff_parent;    /* ne: parent composite (ncomp = world) */
+    int32_t *eff_child;     /* ne: child composite */
+    pose *eff_place;        /* ne: joint frame in the parent composite's frame */
+    int32_t *parent_joint;  /* nbodies: the joint whose child the body is */
+    int32_t *order;         /* nbodies: parents before children */
+    int32_t nwelded;        /* bodies that are not the root of their composite */
+} model;
+
+struct aqs_linkage {
+    aqs_alloc_fn alloc;
+    aqs_free_fn free_fn;
+    void *user;
+    char error[320];
+    int finalized;
+    int solved;
+    int coeffs_dirty; /* positions changed since the coefficients were computed */
+    int loads_dirty;  /* loads changed since the leaves were computed */
+    int lax_inertia;  /* accept inertias violating the triangle inequality */
+
+    int32_t nbodies, body_cap;
+    body_def *bodies;
+    body_load *loads;
+    int32_t *load_slot; /* nbodies: position in loaded_bodies or -1 */
+    int32_t *loaded_bodies;
+    int32_t nloaded;
+
+    int32_t njoints, joint_cap;
+    joint_def *joints;
+    int32_t nq, nv, q_cap, v_cap;
+    double *q;   /* nq positions */
+    double *tau; /* nv active joint forces */
+    double gravity[3];
+
+    model m;
+    tree t;
+    double *qdd;      /* nv */
+    double *cforce;   /* 6 njoints */
+    double *q_saved;  /* nq: positions before a step, to undo a failed one */
+    double *welded_acc; /* scratch for fixed-joint forces */
+    pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
+};
+
+/* Memory through the linkage's allocator. */
+void *lk_alloc(aqs_linkage *L, size_t bytes);
+void *lk_calloc(aqs_linkage *L, size_t count, size_t size);
+void lk_free(aqs_linkage *L, void *p);
+/* Record an error message (printf-style) and return status. */
+aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
+#ifdef __GNUC__
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+#endif

@@ -1,0 +1,277 @@
+/* model.c -- bodies and joints as the user gave them, their validation, and
+ * the welding of fixed joints into rigid groups ("composites"). */
+#include "model.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "dense.h"
+
+#define AQS_PI 3.14159265358979323846
+
+/* Eigenvalues of a symmetric 3x3 matrix, ascending (trigonometric method). */
+static void sym3_eigenvalues(const double A[9], double ev[3])
+{
+    double p1 = A[1] * A[1] + A[2] * A[2] + A[5] * A[5];
+    double q = (A[0] + A[4] + A[8]) / 3.0, p2, p, B[9], r, phi, t;
+    int i;
+    if (p1 == 0.0) {
+        ev[0] = A[0];
+        ev[1] = A[4];
+        ev[2] = A[8];
+    } else {
+        p2 = (A[0] - q) * (A[0] - q) + (A[4] - q) * (A[4] - q) + (A[8] - q) * (A[8] - q) + 2 * p1;
+        p = sqrt(p2 / 6.0);
+        for (i = 0; i < 9; i++) B[i] = (A[i] - (i % 4 == 0 ? q : 0.0)) / p;
+        r = 0.5 * (B[0] * (B[4] * B[8] - B[5] * B[7]) - B[1] * (B[3] * B[8] - B[5] * B[6]) +
+                   B[2] * (B[3] * B[7] - B[4] * B[6]));
+        phi = r <= -1 ? AQS_PI / 3.0 : r >= 1 ? 0.0 : acos(r) / 3.0;
+        ev[2] = q + 2 * p * cos(phi);
+        ev[0] = q + 2 * p * cos(phi + 2.0 * AQS_PI / 3.0);
+        ev[1] = 3 * q - ev[0] - ev[2];
+    }
+    /* sort ascending */
+    if (ev[0] > ev[1]) { t = ev[0]; ev[0] = ev[1]; ev[1] = t; }
+    if (ev[1] > ev[2]) { t = ev[1]; ev[1] = ev[2]; ev[2] = t; }
+    if (ev[0] > ev[1]) { t = ev[0]; ev[0] = ev[1]; ev[1] = t; }
+}
+
+aqs_status model_check_body(aqs_linkage *L, const char *fn, double mass, const double com[3],
+                            const double inertia[9])
+{
+    int i, j;
+    double scale = 0.0, ev[3], tol;
+    if (!isfinite(mass) || mass < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: mass = %g must be finite and >= 0", fn, mass);
+    for (i = 0; i < 3; i++)
+        if (!isfinite(com[i]))
+            return lk_fail(L, AQS_EINVAL, "%s: com[%d] = %g is not finite", fn, i, com[i]);
+    for (i = 0; i < 9; i++) {
+        if (!isfinite(inertia[i]))
+            return lk_fail(L, AQS_EINVAL, "%s: inertia[%d] = %g is not finite", fn, i, inertia[i]);
+        if (fabs(inertia[i]) > scale) scale = fabs(inertia[i]);
+    }
+    for (i = 0; i < 3; i++)
+        for (j = i + 1; j < 3; j++)
+            if (fabs(inertia[3 * i + j] - inertia[3 * j + i]) > 1e-9 * scale)
+                return lk_fail(L, AQS_EINVAL,
+                               "%s: inertia is not symmetric: inertia[%d][%d] = %g but "
+                               "inertia[%d][%d] = %g",
+                               fn, i, j, inertia[3 * i + j], j, i, inertia[3 * j + i]);
+    {
+        double S[9];
+        memcpy(S, inertia, sizeof S);
+        dense_symmetrize(S, 3);
+        sym3_eigenvalues(S, ev);
+    }
+    tol = 1e-9 * (fabs(ev[0]) + fabs(ev[1]) + fabs(ev[2]));
+    if (mass > 0.0 && !(ev[0] > 0.0))
+        return lk_fail(L, AQS_EINVAL,
+                       "%s: inertia is not positive definite (smallest principal moment %g)",
+                       fn, ev[0]);
+    if (mass == 0.0 && ev[0] < -tol)
+        return lk_fail(L, AQS_EINVAL,
+                       "%s: inertia of a massless body must be positive semi-definite "
+                       "(smallest principal moment %g)",
+                       fn, ev[0]);
+    if (!L->lax_inertia && ev[0] + ev[1] < ev[2] - tol)
+        return lk_fail(L, AQS_EINVAL,
+                       "%s: principal moments %g, %g, %g violate the triangle inequality "
+                       "(see aqs_linkage_set_inertia_check)", fn,
+                       ev[0], ev[1], ev[2]);
+    return AQS_OK;
+}
+
+void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
+{
+    const body_def *b = &L->bodies[body];
+    spatial_inertia(b->mass, b->com, b->inertia, I);
+}
+
+void model_free(aqs_linkage *L)
+{
+    model *m = &L->m;
+    lk_free(L, m->comp_of_body);
+    lk_free(L, m->body_in_comp);
+    lk_free(L, m->comp_root);
+    lk_free(L, m->comp_inertia);
+    lk_free(L, m->comp_inverse);
+    lk_free(L, m->comp_force);
+    lk_free(L, m->comp_loaded);
+    lk_free(L, m->loaded_comps);
+    lk_free(L, m->eff_joint);
+    lk_free(L, m->eff_of_joint);
+    lk_free(L, m->eff_parent);
+    lk_free(L, m->eff_child);
+    lk_free(L, m->eff_place);
+    lk_free(L, m->parent_joint);
+    lk_free(L, m->order);
+    memset(m, 0, sizeof *m);
+}
+
+/* Topology: each body the child of exactly one joint, free joints from the
+ * world, everything reachable from the world. Fills parent_joint and order. */
+static aqs_status check_topology(aqs_linkage *L, int32_t *first_child, int32_t *next_sibling)
+{
+    model *m = &L->m;
+    int32_t i, head = 0, tail = 0;
+    if (L->nbodies == 0) return lk_fail(L, AQS_EMODEL, "aqs_linkage_finalize: the linkage has no body");
+    for (i = 0; i < L->nbodies; i++) {
+        m->parent_joint[i] = -1;
+        first_child[i] = -1;
+    }
+    for (i = 0; i < L->njoints; i++) {
+        const joint_def *j = &L->joints[i];
+        if (m->parent_joint[j->child] >= 0)
+            return lk_fail(L, AQS_EMODEL,
+                           "aqs_linkage_finalize: body %d is the child of two joints (%d and %d)",
+                           (int)j->child, (int)m->parent_joint[j->child], (int)i);
+        m->parent_joint[j->child] = i;
+    }
+    for (i = 0; i < L->nbodies; i++)
+        if (m->parent_joint[i] < 0)
+            return lk_fail(L, AQS_EMODEL,
+                           "aqs_linkage_finalize: body %d has no parent joint (every body needs "
+                           "exactly one)",
+                           (int)i);
+    /* Children lists, in joint order; world roots traversed first. */
+    for (i = L->njoints - 1; i >= 0; i--) {
+        const joint_def *j = &L->joints[i];
+        if (j->parent >= 0) {
+            next_sibling[j->child] = first_child[j->parent];
+            first_child[j->parent] = j->child;
+        }
+    }
+    for (i = 0; i < L->njoints; i++)
+        if (L->joints[i].parent == AQS_WORLD) m->order[tail++] = L->joints[i].child;
+    while (head < tail) {
+        int32_t b = m->order[head++], c;
+        for (c = first_child[b]; c >= 0; c = next_sibling[c]) m->order[tail++] = c;
+    }
+    if (tail < L->nbodies) {
+        /* Find the first unreachable body for the message. */
+        unsigned char *seen = (unsigned char *)next_sibling; /* reuse: values no longer needed */
+        memset(seen, 0, (size_t)L->nbodies);
+        for (i = 0; i < tail; i++) seen[m->order[i]] = 1;
+        for (i = 0; i < L->nbodies && seen[i]; i++) {
+        }
+        return lk_fail(L, AQS_EMODEL,
+                       "aqs_linkage_finalize: body %d is not connected to the world (its "
+                       "parent chain forms a cycle or never reaches a joint from AQS_WORLD)",
+                       (int)i);
+    }
+    return AQS_OK;
+}
+
+aqs_status model_build(aqs_linkage *L)
+{
+    model *m = &L->m;
+    int32_t nb = L->nbodies, nj = L->njoints, i, k;
+    int32_t *first_child = NULL, *next_sibling = NULL;
+    aqs_status st;
+    memset(m, 0, sizeof *m);
+    m->comp_of_body = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    m->body_in_comp = lk_calloc(L, (size_t)nb + 1, sizeof(pose));
+    m->parent_joint = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    m->order = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    m->eff_of_joint = lk_calloc(L, (size_t)nj + 1, sizeof(int32_t));
+    first_child = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    next_sibling = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    if (!m->comp_of_body || !m->body_in_comp || !m->parent_joint || !m->order ||
+        !m->eff_of_joint || !first_child || !next_sibling) {
+        st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
+        goto fail;
+    }
+    st = check_topology(L, first_child, next_sibling);
+    if (st != AQS_OK) goto fail;
+
+    /* Composites: walk parents before children; a fixed joint joins its
+     * child to the parent's composite (the world's is -1 until numbered). */
+    m->ncomp = 0;
+    m->ne = 0;
+    for (i = 0; i < nj; i++) m->eff_of_joint[i] = L->joints[i].type == AQS_JOINT_FIXED ? -1 : m->ne++;
+    for (k = 0; k < nb; k++) {
+        int32_t b = m->order[k];
+        const joint_def *j = &L->joints[m->parent_joint[b]];
+        if (j->type == AQS_JOINT_FIXED) {
+            pose place;
+            pose_from_quat(j->pos, j->quat, &place);
+            if (j->parent == AQS_WORLD) {
+                m->comp_of_body[b] = -1;
+                m->body_in_comp[b] = place;
+            } else {
+                m->comp_of_body[b] = m->comp_of_body[j->parent];
+                pose_compose(&m->body_in_comp[j->parent], &place, &m->body_in_comp[b]);
+            }
+            m->nwelded++;
+        } else {
+            m->comp_of_body[b] = m->ncomp++;
+            pose_identity(&m->body_in_comp[b]);
+        }
+    }
+    for (i = 0; i < nb; i++)
+        if (m->comp_of_body[i] < 0) m->comp_of_body[i] = m->ncomp; /* the world */
+
+    m->comp_root = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
+    m->comp_inertia = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    m->comp_inverse = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    m->comp_force = lk_calloc(L, (size_t)m->ncomp + 1, 6 * sizeof(double));
+    m->comp_loaded = lk_calloc(L, (size_t)m->ncomp + 1, 1);
+    m->loaded_comps = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
+    m->eff_joint = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    m->eff_parent = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    m->eff_child = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    m->eff_place = lk_calloc(L, (size_t)m->ne + 1, sizeof(pose));
+    if (!m->comp_root || !m->comp_inertia || !m->comp_inverse || !m->comp_force ||
+        !m->comp_loaded || !m->loaded_comps || !m->eff_joint || !m->eff_parent ||
+        !m->eff_child || !m->eff_place) {
+        st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
+        goto fail;
+    }
+    /* Inertia of each composite in its root body's frame. */
+    for (k = 0; k < nb; k++) {
+        int32_t b = m->order[k], c = m->comp_of_body[b];
+        double Ib[36], Ic[36];
+        if (c == m->ncomp) continue;
+        if (L->joints[m->parent_joint[b]].type != AQS_JOINT_FIXED) m->comp_root[c] = b;
+        model_body_inertia(L, b, Ib);
+        spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
+        for (i = 0; i < 36; i++) m->comp_inertia[36 * c + i] += Ic[i];
+    }
+    for (i = 0; i < m->ncomp; i++) {
+        double mass = m->comp_inertia[36 * i + 21]; /* the (3,3) entry is the total mass */
+        if (!(mass > 0.0) || dense_spd_inverse(m->comp_inertia + 36 * i, m->comp_inverse + 36 * i, 6) != 0) {
+            st = lk_fail(L, AQS_EMODEL,
+                         "aqs_linkage_finalize: body %d (with the bodies welded to it by fixed "
+                         "joints) has total mass %g or a singular inertia; a massless body must "
+                         "be welded to a massive one",
+                         (int)m->comp_root[i], mass);
+            goto fail;
+        }
+    }
+    /* Effective joints. */
+    for (i = 0; i < nj; i++) {
+        const joint_def *j = &L->joints[i];
+        int32_t e = m->eff_of_joint[i];
+        pose place;
+        if (e < 0) continue;
+        m->eff_joint[e] = i;
+        m->eff_child[e] = m->comp_of_body[j->child];
+        pose_from_quat(j->pos, j->quat, &place);
+        if (j->parent == AQS_WORLD) {
+            m->eff_parent[e] = m->ncomp;
+            m->eff_place[e] = place;
+        } else {
+            m->eff_parent[e] = m->comp_of_body[j->parent];
+            pose_compose(&m->body_in_comp[j->parent], &place, &m->eff_place[e]);
+        }
+    }
+    lk_free(L, first_child);
+    lk_free(L, next_sibling);
+    return AQS_OK;
+fail:
+    lk_free(L, first_child);
+    lk_free(L, next_sibling);
+    model_free(L);
+    return st;
+}

@@ -1,0 +1,261 @@
+/* spatial.c -- rigid poses, quaternions, 6-D transforms and inertias. */
+#include "spatial.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "dense.h"
+
+void pose_identity(pose *P)
+{
+    static const double I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    memcpy(P->R, I3, sizeof I3);
+    P->p[0] = P->p[1] = P->p[2] = 0.0;
+}
+
+void pose_compose(const pose *a, const pose *b, pose *out)
+{
+    double t[3];
+    mat3_mul(a->R, b->R, out->R);
+    mat3_vec(a->R, b->p, t);
+    out->p[0] = a->p[0] + t[0];
+    out->p[1] = a->p[1] + t[1];
+    out->p[2] = a->p[2] + t[2];
+}
+
+void pose_inverse(const pose *a, pose *out)
+{
+    int i, j;
+    double t[3];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) out->R[3 * i + j] = a->R[3 * j + i];
+    mat3_tvec(a->R, a->p, t);
+    out->p[0] = -t[0];
+    out->p[1] = -t[1];
+    out->p[2] = -t[2];
+}
+
+void pose_from_quat(const double pos[3], const double quat[4], pose *P)
+{
+    quat_to_rot(quat, P->R);
+    P->p[0] = pos[0];
+    P->p[1] = pos[1];
+    P->p[2] = pos[2];
+}
+
+void quat_to_rot(const double q[4], double R[9])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    R[0] = 1 - 2 * (y * y + z * z);
+    R[1] = 2 * (x * y - w * z);
+    R[2] = 2 * (x * z + w * y);
+    R[3] = 2 * (x * y + w * z);
+    R[4] = 1 - 2 * (x * x + z * z);
+    R[5] = 2 * (y * z - w * x);
+    R[6] = 2 * (x * z - w * y);
+    R[7] = 2 * (y * z + w * x);
+    R[8] = 1 - 2 * (x * x + y * y);
+}
+
+void rot_to_quat(const double R[9], double q[4])
+{
+    /* Shepperd's method: pick the largest of w, x, y, z to divide by. */
+    double tr = R[0] + R[4] + R[8], s;
+    if (tr >= R[0] && tr >= R[4] && tr >= R[8]) {
+        s = 2.0 * sqrt(1.0 + tr);
+        q[0] = 0.25 * s;
+        q[1] = (R[7] - R[5]) / s;
+        q[2] = (R[2] - R[6]) / s;
+        q[3] = (R[3] - R[1]) / s;
+    } else if (R[0] >= R[4] && R[0] >= R[8]) {
+        s = 2.0 * sqrt(1.0 + R[0] - R[4] - R[8]);
+        q[0] = (R[7] - R[5]) / s;
+        q[1] = 0.25 * s;
+        q[2] = (R[1] + R[3]) / s;
+        q[3] = (R[2] + R[6]) / s;
+    } else if (R[4] >= R[8]) {
+        s = 2.0 * sqrt(1.0 + R[4] - R[0] - R[8]);
+        q[0] = (R[2] - R[6]) / s;
+        q[1] = (R[1] + R[3]) / s;
+        q[2] = 0.25 * s;
+        q[3] = (R[5] + R[7]) / s;
+    } else {
+        s = 2.0 * sqrt(1.0 + R[8] - R[0] - R[4]);
+        q[0] = (R[3] - R[1]) / s;
+        q[1] = (R[2] + R[6]) / s;
+        q[2] = (R[5] + R[7]) / s;
+        q[3] = 0.25 * s;
+    }
+    if (q[0] < 0) {
+        q[0] = -q[0];
+        q[1] = -q[1];
+        q[2] = -q[2];
+        q[3] = -q[3];
+    }
+    s = quat_norm(q);
+    q[0] /= s;
+    q[1] /= s;
+    q[2] /= s;
+    q[3] /= s;
+}
+
+void quat_mul(const double a[4], const double b[4], double out[4])
+{
+    double w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    double x = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    double y = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    double z = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    out[0] = w;
+    out[1] = x;
+    out[2] = y;
+    out[3] = z;
+}
+
+void quat_from_rotvec(const double w[3], double q[4])
+{
+    double angle = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    double half = 0.5 * angle;
+    /* sin(half)/angle, with its Taylor series near zero. */
+    double k = angle < 1e-8 ? 0.5 - angle * angle / 48.0 : sin(half) / angle;
+    q[0] = cos(half);
+    q[1] = k * w[0];
+    q[2] = k * w[1];
+    q[3] = k * w[2];
+}
+
+double quat_norm(const double q[4])
+{
+    return sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+}
+
+void rot_axis_angle(const double a[3], double angle, double R[9])
+{
+    double c = cos(angle), s = sin(angle), t = 1.0 - c;
+    double x = a[0], y = a[1], z = a[2];
+    R[0] = t * x * x + c;
+    R[1] = t * x * y - s * z;
+    R[2] = t * x * z + s * y;
+    R[3] = t * x * y + s * z;
+    R[4] = t * y * y + c;
+    R[5] = t * y * z - s * x;
+    R[6] = t * x * z - s * y;
+    R[7] = t * y * z + s * x;
+    R[8] = t * z * z + c;
+}
+
+void vec3_cross(const double a[3], const double b[3], double out[3])
+{
+    double x = a[1] * b[2] - a[2] * b[1];
+    double y = a[2] * b[0] - a[0] * b[2];
+    double z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
+double vec3_dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+void mat3_mul(const double A[9], const double B[9], double out[9])
+{
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            out[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+}
+
+void mat3_vec(const double A[9], const double v[3], double out[3])
+{
+    double x = A[0] * v[0] + A[1] * v[1] + A[2] * v[2];
+    double y = A[3] * v[0] + A[4] * v[1] + A[5] * v[2];
+    double z = A[6] * v[0] + A[7] * v[1] + A[8] * v[2];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
+void mat3_tvec(const double A[9], const double v[3], double out[3])
+{
+    double x = A[0] * v[0] + A[3] * v[1] + A[6] * v[2];
+    double y = A[1] * v[0] + A[4] * v[1] + A[7] * v[2];
+    double z = A[2] * v[0] + A[5] * v[1] + A[8] * v[2];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
+static void skew(const double p[3], double S[9])
+{
+    S[0] = 0;
+    S[1] = -p[2];
+    S[2] = p[1];
+    S[3] = p[2];
+    S[4] = 0;
+    S[5] = -p[0];
+    S[6] = -p[1];
+    S[7] = p[0];
+    S[8] = 0;
+}
+
+static void put_block(double X[36], int bi, int bj, const double B[9])
+{
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) X[6 * (3 * bi + i) + 3 * bj + j] = B[3 * i + j];
+}
+
+void spatial_to_parent(const pose *P, double X[36])
+{
+    double S[9], SR[9];
+    static const double Z[9] = {0};
+    skew(P->p, S);
+    mat3_mul(S, P->R, SR);
+    put_block(X, 0, 0, P->R);
+    put_block(X, 0, 1, Z);
+    put_block(X, 1, 0, SR);
+    put_block(X, 1, 1, P->R);
+}
+
+void spatial_from_parent(const pose *P, double X[36])
+{
+    pose inv;
+    pose_inverse(P, &inv);
+    spatial_to_parent(&inv, X);
+}
+
+void spatial_inertia(double m, const double c[3], const double Ic[9], double I[36])
+{
+    double S[9], SST[9], mS[9], mST[9], top[9], mI[9] = {0};
+    int i, j;
+    skew(c, S);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double s = 0;
+            int k;
+            for (k = 0; k < 3; k++) s += S[3 * i + k] * S[3 * j + k];
+            SST[3 * i + j] = s;
+        }
+    for (i = 0; i < 9; i++) {
+        top[i] = Ic[i] + m * SST[i];
+        mS[i] = m * S[i];
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) mST[3 * i + j] = mS[3 * j + i];
+    mI[0] = mI[4] = mI[8] = m;
+    put_block(I, 0, 0, top);
+    put_block(I, 0, 1, mS);
+    put_block(I, 1, 0, mST);
+    put_block(I, 1, 1, mI);
+}
+
+void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36])
+{
+    /* X* = X^{-T}; with Xi = motion transform G -> F, X* = Xi^T. */
+    double Xi[36], T[36];
+    spatial_from_parent(P, Xi);
+    dense_mul_tn(Xi, IF, T, 6, 6, 6); /* Xi^T IF */
+    dense_mul(T, Xi, IG, 6, 6, 6);    /* (Xi^T IF) Xi */
+    dense_symmetrize(IG, 6);
+}

@@ -1,0 +1,164 @@
+/* update.c -- hierarchical frames and the coefficient update. */
+#include "update.h"
+
+#include <string.h>
+
+#include "dca.h"
+#include "dense.h"
+
+void update_leaf_poses(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    pose *P = t->poses + nd->poses;
+    int32_t i;
+    for (i = 0; i < nd->nh; i++) {
+        int32_t e = t->handles[nd->handles + i];
+        if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
+        else P[i] = L->m.eff_place[e];                             /* holds e up: joint frame */
+    }
+}
+
+/* Pose of B's frame (the child frame of k) in C's frame. */
+static void child_frame_in_node(const aqs_linkage *L, const node *C, pose *out)
+{
+    const tree *t = &L->t;
+    const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
+    const pose *PA = t->poses + t->nodes[C->a].poses;
+    pose J;
+    joint_child_pose(jd, L->q + jd->qoff, &J);
+    pose_compose(&PA[C->ka], &J, out);
+}
+
+void update_node_poses(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    const node *C = &t->nodes[n], *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses;
+    pose *P = t->poses + C->poses, Pk;
+    int32_t i, ci = 0;
+    child_frame_in_node(L, C, &Pk);
+    for (i = 0; i < A->nh; i++)
+        if (i != C->ka) P[ci++] = PA[i];
+    for (i = 0; i < B->nh; i++)
+        if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+}
+
+void update_all_poses(aqs_linkage *L)
+{
+    int32_t n;
+    for (n = 0; n < L->t.nnodes; n++)
+        if (L->t.nodes[n].joint >= 0) update_node_poses(L, n);
+}
+
+void update_poses_from_joint(aqs_linkage *L, int32_t e)
+{
+    int32_t n = L->t.node_of_eff[e];
+    for (; n >= 0; n = L->t.nodes[n].parent) update_node_poses(L, n);
+}
+
+void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P)
+{
+    const tree *t = &L->t;
+    int32_t n, parent;
+    pose_identity(P);
+    if (comp == L->m.ncomp || t->nnodes == 0) return;
+    /* Walk up: a B child's frame is its parent's frame times A's handle k
+     * times J(q_k); an A child shares its parent's frame. */
+    for (n = t->leaf_of_comp[comp]; (parent = t->nodes[n].parent) >= 0; n = parent) {
+        const node *C = &t->nodes[parent];
+        if (C->b == n) {
+            pose Pk, tmp;
+            child_frame_in_node(L, C, &Pk);
+            pose_compose(&Pk, P, &tmp);
+            *P = tmp;
+        }
+    }
+}
+
+void update_body_pose_world(const aqs_linkage *L, int32_t body, pose *P)
+{
+    pose C;
+    update_comp_pose_world(L, L->m.comp_of_body[body], &C);
+    pose_compose(&C, &L->m.body_in_comp[body], P);
+}
+
+void update_all_body_poses_world(const aqs_linkage *L, pose *out)
+{
+    int32_t k;
+    for (k = 0; k < L->nbodies; k++) {
+        int32_t b = L->m.order[k];
+        const joint_def *jd = &L->joints[L->m.parent_joint[b]];
+        pose place, J, jp;
+        pose_from_quat(jd->pos, jd->quat, &place);
+        joint_child_pose(jd, L->q + jd->qoff, &J);
+        pose_compose(&place, &J, &jp);
+        if (jd->parent == AQS_WORLD) out[b] = jp;
+        else pose_compose(&out[jd->parent], &jp, &out[b]);
+    }
+}
+
+void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
+                              double f[6])
+{
+    const body_load *ld = &L->loads[body];
+    const pose *bc = &L->m.body_in_comp[body];
+    double r[3], n[3];
+    mat3_tvec(comp_world->R, ld->force, f + 3);
+    mat3_tvec(comp_world->R, ld->torque, f);
+    mat3_vec(bc->R, ld->point, r);
+    r[0] += bc->p[0];
+    r[1] += bc->p[1];
+    r[2] += bc->p[2];
+    vec3_cross(r, f + 3, n);
+    f[0] += n[0];
+    f[1] += n[1];
+    f[2] += n[2];
+}
+
+void update_loads(aqs_linkage *L)
+{
+    model *m = &L->m;
+    int32_t i, k;
+    if (L->t.nnodes == 0) return;
+    for (i = 0; i < m->nloaded_comps; i++) {
+        int32_t c = m->loaded_comps[i];
+        memset(m->comp_force + 6 * c, 0, 6 * sizeof(double));
+        m->comp_loaded[c] = 0;
+        dca_leaf_b(L, L->t.leaf_of_comp[c]);
+    }
+    m->nloaded_comps = 0;
+    for (k = 0; k < L->nloaded; k++) {
+        int32_t b = L->loaded_bodies[k], c = m->comp_of_body[b];
+        pose Pc;
+        double f[6];
+        if (c == m->ncomp) continue; /* welded to the world: moves nothing */
+        if (!m->comp_loaded[c]) {
+            m->comp_loaded[c] = 1;
+            m->loaded_comps[m->nloaded_comps++] = c;
+        }
+        update_comp_pose_world(L, c, &Pc);
+        update_body_load_in_comp(L, b, &Pc, f);
+        for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
+    }
+    for (i = 0; i < m->nloaded_comps; i++) dca_leaf_b(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
+    dca_leaf_b(L, L->t.leaf_of_comp[m->ncomp]);
+}
+
+aqs_status update_coefficients(aqs_linkage *L)
+{
+    int32_t n;
+    if (!L->coeffs_dirty && !L->loads_dirty) return AQS_OK;
+    update_loads(L);
+    for (n = 0; n < L->t.nnodes; n++) {
+        const node *nd = &L->t.nodes[n];
+        if (nd->joint < 0) continue;
+        if (dca_node_update(L, n) != 0)
+            return lk_fail(L, AQS_ENUMERIC,
+                           "articulated inertia across joint %d is numerically singular",
+                           (int)L->m.eff_joint[nd->joint]);
+    }
+    L->coeffs_dirty = 0;
+    L->loads_dirty = 0;
+    return AQS_OK;
+}

@@ -1,0 +1,36 @@
+/* update.h -- hierarchical frames (MATH.md §9.2), world poses on request,
+ * re-expression of world-frame loads, and the coefficient update (§9.1). */
+#ifndef AQS_UPDATE_H
+#define AQS_UPDATE_H
+
+#include "linkage.h"
+
+/* Handle-frame poses of a leaf in its composite's frame (constant). */
+void update_leaf_poses(aqs_linkage *L, int32_t n);
+/* Cross poses of an internal node from its children and q_k. */
+void update_node_poses(aqs_linkage *L, int32_t n);
+/* All internal nodes' cross poses, children first. O(N). */
+void update_all_poses(aqs_linkage *L);
+/* Cross poses of the node of effective joint e and its ancestors. O(log N). */
+void update_poses_from_joint(aqs_linkage *L, int32_t e);
+
+/* World pose of a composite's frame (world: identity), O(log N). */
+void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P);
+/* World pose of a body, O(log N). */
+void update_body_pose_world(const aqs_linkage *L, int32_t body, pose *P);
+/* World poses of all bodies, parents before children, O(N). */
+void update_all_body_poses_world(const aqs_linkage *L, pose *out);
+
+/* The load of a body as a spatial force in its composite's frame, given the
+ * composite's world pose. */
+void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
+                              double f[6]);
+/* Re-express every body load in its composite's frame and refresh the
+ * leaves whose load changed (and the world leaf, for gravity). */
+void update_loads(aqs_linkage *L);
+/* Bring every coefficient up to date with the positions and loads (exact
+ * mode: all internal nodes, children first). Returns AQS_OK or AQS_ENUMERIC
+ * (message set). */
+aqs_status update_coefficients(aqs_linkage *L);
+
+#endif

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Install what is missing of the project's dependencies (Debian packages, PyPI).
+set -euo pipefail
+pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config)
+missing=()
+for p in "${pkgs[@]}"; do
+    dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+command -v gcc >/dev/null && command -v g++ >/dev/null || missing+=(gcc g++)
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "deps: installing ${missing[*]}"
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+PY=${PYTHON:-python3}
+pymissing=()
+$PY -c "import numpy" 2>/dev/null || pymissing+=(numpy)
+$PY -c "import pytest" 2>/dev/null || pymissing+=(pytest)
+if [ ${#pymissing[@]} -gt 0 ]; then
+    echo "deps: pip installing ${pymissing[*]}"
+    $PY -m pip install -q "${pymissing[@]}"
+fi
