@@ -23,7 +23,7 @@ OPT := -O1 -g
 else
 BUILD := build
 SANFLAGS :=
-OPT := -O2 -g
+OPT := -O2 -funroll-loops -g
 endif
 
 CC ?= cc

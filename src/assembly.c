@@ -186,7 +186,7 @@ static void layout(tree *t)
         n->xf = pool_take(&t->ndata, 6 * h);
         if (n->joint >= 0) {
             n->M = pool_take(&t->ndata, 36 * h);
-            n->X = pool_take(&t->ndata, 36);
+            n->J = pool_take(&t->nposes, 1);
             n->W = pool_take(&t->ndata, 36);
             n->U = pool_take(&t->ndata, 6 * n->d);
             n->rho = pool_take(&t->ndata, n->d);

@@ -4,30 +4,41 @@
  * frame (fixed in the parent body) for the joints it holds up (§3.6). */
 #include "dca.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "dense.h"
 #include "model.h"
 #include "update.h"
 
-/* Block (i, j) of an n-handle Phi: 6x6 at rows 6i, columns 6j. */
-static double *phi_block(double *phi, int32_t nh, int32_t i, int32_t j)
+/* Phi is stored block-major: the 6x6 block (i, j) of an nh-handle node is
+ * contiguous at 36 (nh i + j), row-major inside. */
+static double *blk(double *phi, int32_t nh, int32_t i, int32_t j)
 {
-    return phi + (int64_t)36 * nh * i + 6 * j;
+    return phi + 36 * ((int64_t)nh * i + j);
 }
 
-static void get_block(const double *phi, int32_t nh, int32_t i, int32_t j, double out[36])
+static const double *cblk(const double *phi, int32_t nh, int32_t i, int32_t j)
 {
-    int r;
-    const double *src = phi + (int64_t)36 * nh * i + 6 * j;
-    for (r = 0; r < 6; r++) memcpy(out + 6 * r, src + (int64_t)6 * nh * r, 6 * sizeof(double));
+    return phi + 36 * ((int64_t)nh * i + j);
 }
 
-static void put_block(double *phi, int32_t nh, int32_t i, int32_t j, const double in[36])
+static void transpose6(const double *A, double *T)
 {
-    int r;
-    double *dst = phi_block(phi, nh, i, j);
-    for (r = 0; r < 6; r++) memcpy(dst + (int64_t)6 * nh * r, in + 6 * r, 6 * sizeof(double));
+    int i, j;
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) T[6 * j + i] = A[6 * i + j];
+}
+
+/* Make block (j, i) the transpose of block (i, j) for i < j, and the
+ * diagonal blocks symmetric. */
+static void symmetrize_blocks(double *phi, int32_t nh)
+{
+    int32_t i, j;
+    for (i = 0; i < nh; i++) {
+        dense_symmetrize(blk(phi, nh, i, i), 6);
+        for (j = i + 1; j < nh; j++) transpose6(blk(phi, nh, i, j), blk(phi, nh, j, i));
+    }
 }
 
 void dca_leaf_phi(aqs_linkage *L, int32_t n)
@@ -45,20 +56,16 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
         const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
         double *Y = t->scratch; /* nh blocks X_h I^{-1} */
         double *X = t->scratch + 36 * nd->nh;
-        double blk[36];
         for (i = 0; i < nd->nh; i++) {
             spatial_from_parent(&P[i], X);
-            dense_mul(X, Iinv, Y + 36 * i, 6, 6, 6);
+            dense_mul66(X, Iinv, Y + 36 * i);
         }
         /* Phi_{hh'} = X_h I^{-1} X_h'^T */
         for (j = 0; j < nd->nh; j++) {
             spatial_from_parent(&P[j], X);
-            for (i = 0; i < nd->nh; i++) {
-                dense_mul_nt(Y + 36 * i, X, blk, 6, 6, 6);
-                put_block(phi, nd->nh, i, j, blk);
-            }
+            for (i = 0; i <= j; i++) dense_mul66_nt(Y + 36 * i, X, blk(phi, nd->nh, i, j));
         }
-        dense_symmetrize(phi, 6 * nd->nh);
+        symmetrize_blocks(phi, nd->nh);
     }
 }
 
@@ -91,6 +98,13 @@ static void xform_force_back(const double X[36], const double f[6], double out[6
     dense_tmatvec(X, f, out, 6, 6);
 }
 
+/* Index among a child's handles of the outer handle at position c of the
+ * merged list [A-outer; B-outer]. */
+static int32_t child_index(int32_t c, int32_t k)
+{
+    return c < k ? c : c + 1;
+}
+
 int dca_node_update(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
@@ -98,45 +112,37 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    double *X = t->data + C->X, *W = t->data + C->W, *U = t->data + C->U;
+    pose *J = (t->poses + C->J);
+    double *W = t->data + C->W, *U = t->data + C->U;
     double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
     double *M = t->data + C->M, *phi = t->data + C->phi, *bC = t->data + C->bv;
     const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
-    int32_t i, j, ci, cj;
-    double Akk[36], Bkk[36], T[36], V[36], VS[36], D[36], Dinv[36], beta[6], bk[6], tmp[6];
-    double blk[36];
-    pose J;
+    int32_t nAo = nA - 1, i, ci, cj;
+    double T[36], V[36], VS[36], D[36], Dinv[36], beta[6], bk[6], tmp[6];
 
-    joint_child_pose(jd, q, &J);
-    spatial_from_parent(&J, X);
+    joint_child_pose(jd, q, J); /* X maps k's joint frame to its child frame */
     joint_subspace(jd, q, S);
 
-    /* A's k blocks into the child frame of k (§3.6). */
-    get_block(phiA, nA, ka, ka, Akk);
-    dense_mul(X, Akk, T, 6, 6, 6);
-    dense_mul_nt(T, X, Akk, 6, 6, 6);
-    get_block(phiB, nB, kb, kb, Bkk);
-    for (i = 0; i < 36; i++) T[i] = Akk[i] + Bkk[i];
+    /* V = (X Phi^A_kk X^T + Phi^B_kk)^{-1}: A's k blocks into the child frame
+     * of k (§3.6). */
+    spatial_xform_congruence(J, cblk(phiA, nA, ka, ka), T);
+    {
+        const double *Bkk = cblk(phiB, nB, kb, kb);
+        for (i = 0; i < 36; i++) T[i] += Bkk[i];
+    }
     dense_symmetrize(T, 6);
     if (dense_spd_inverse(T, V, 6) != 0) return -1;
 
     /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
-    for (i = 0, ci = 0; i < nA; i++) {
-        if (i == ka) continue;
-        get_block(phiA, nA, i, ka, blk);
-        dense_mul_nt(blk, X, M + 36 * ci, 6, 6, 6);
-        ci++;
-    }
-    for (i = 0; i < nB; i++) {
-        if (i == kb) continue;
-        get_block(phiB, nB, i, kb, blk);
-        for (j = 0; j < 36; j++) M[36 * ci + j] = -blk[j];
-        ci++;
+    for (ci = 0; ci < nAo; ci++) spatial_xform_rows(J, cblk(phiA, nA, child_index(ci, ka), ka), M + 36 * ci);
+    for (ci = nAo; ci < nh; ci++) {
+        const double *src = cblk(phiB, nB, child_index(ci - nAo, kb), kb);
+        for (i = 0; i < 36; i++) M[36 * ci + i] = -src[i];
     }
 
-    dense_matvec(X, bA + 6 * ka, bk, 6, 6); /* b^A_k in the child frame */
+    spatial_xform_motion(J, bA + 6 * ka, bk); /* b^A_k in the child frame */
     for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * kb + i];
 
     if (d == 6) {
@@ -144,11 +150,30 @@ int dca_node_update(aqs_linkage *L, int32_t n)
         memset(W, 0, 36 * sizeof(double));
         memset(U, 0, 36 * sizeof(double));
         for (i = 0; i < 6; i++) U[7 * i] = 1.0;
-        dense_matvec(T, Q, rho, 6, 6);
+        dense_matvec6(T, Q, rho);
         for (i = 0; i < 6; i++) {
             rho[i] -= beta[i];
             gamma[i] = Q[i];
         }
+    } else if (d == 1) {
+        /* One dof (revolute, prismatic): D is a scalar and W a rank-1 update. */
+        double Dv = 0.0, sb = 0.0, r;
+        dense_matvec6(V, S, VS);
+        for (i = 0; i < 6; i++) {
+            Dv += S[i] * VS[i];
+            sb += VS[i] * beta[i];
+        }
+        if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
+        for (i = 0; i < 6; i++) U[i] = VS[i] / Dv;
+        for (i = 0; i < 6; i++) {
+            int j;
+            for (j = i; j < 6; j++) W[6 * i + j] = W[6 * j + i] = V[6 * i + j] - VS[i] * U[j];
+        }
+        r = (Q[0] - sb) / Dv;
+        rho[0] = r;
+        /* gamma = W beta + U^T Q = V beta - V S (S^T V beta) / D + U Q = V beta + VS r */
+        dense_matvec6(V, beta, gamma);
+        for (i = 0; i < 6; i++) gamma[i] += VS[i] * r;
     } else {
         dense_mul(V, S, VS, 6, 6, d);       /* V S (6 x d) */
         dense_mul_tn(S, VS, D, d, 6, d);    /* D = S^T V S */
@@ -161,7 +186,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
         dense_tmatvec(VS, beta, tmp, 6, d); /* rho = D^{-1} (Q - S^T V beta) */
         for (i = 0; i < d; i++) tmp[i] = Q[i] - tmp[i];
         dense_matvec(Dinv, tmp, rho, d, d);
-        dense_matvec(W, beta, gamma, 6, 6); /* gamma = W beta + U^T Q */
+        dense_matvec6(W, beta, gamma);      /* gamma = W beta + U^T Q */
         dense_tmatvec(U, Q, tmp, d, 6);
         for (i = 0; i < 6; i++) gamma[i] += tmp[i];
     }
@@ -169,38 +194,25 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     /* Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T; b_C = [b^A_o; b^B_o] - M gamma. */
     {
         double *MW = t->scratch;
-        dense_mul(M, W, MW, 6 * nh, 6, 6);
+        for (ci = 0; ci < nh; ci++) dense_mul66(M + 36 * ci, W, MW + 36 * ci);
         for (ci = 0; ci < nh; ci++)
             for (cj = ci; cj < nh; cj++) {
-                int fromA_i = ci < nA - 1, fromA_j = cj < nA - 1;
-                dense_mul_nt(MW + 36 * ci, M + 36 * cj, blk, 6, 6, 6);
-                if (fromA_i == fromA_j) {
-                    int32_t ai = fromA_i ? (ci < ka ? ci : ci + 1) : (ci - (nA - 1) < kb ? ci - (nA - 1) : ci - (nA - 1) + 1);
-                    int32_t aj = fromA_j ? (cj < ka ? cj : cj + 1) : (cj - (nA - 1) < kb ? cj - (nA - 1) : cj - (nA - 1) + 1);
-                    double base[36];
-                    get_block(fromA_i ? phiA : phiB, fromA_i ? nA : nB, ai, aj, base);
-                    for (i = 0; i < 36; i++) blk[i] = base[i] - blk[i];
+                double *out = blk(phi, nh, ci, cj);
+                dense_mul66_nt(MW + 36 * ci, M + 36 * cj, out);
+                if ((ci < nAo) == (cj < nAo)) {
+                    const double *base =
+                        ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
+                                 : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
+                    for (i = 0; i < 36; i++) out[i] = base[i] - out[i];
                 } else {
-                    for (i = 0; i < 36; i++) blk[i] = -blk[i];
-                }
-                put_block(phi, nh, ci, cj, blk);
-                if (cj != ci) {
-                    double tr[36];
-                    for (i = 0; i < 6; i++)
-                        for (j = 0; j < 6; j++) tr[6 * j + i] = blk[6 * i + j];
-                    put_block(phi, nh, cj, ci, tr);
+                    for (i = 0; i < 36; i++) out[i] = -out[i];
                 }
             }
-        dense_symmetrize(phi, 6 * nh);
-        dense_matvec(M, gamma, bC, 6 * nh, 6);
+        symmetrize_blocks(phi, nh);
         for (ci = 0; ci < nh; ci++) {
-            const double *src;
-            if (ci < nA - 1) src = bA + 6 * (ci < ka ? ci : ci + 1);
-            else {
-                int32_t bj = ci - (nA - 1);
-                src = bB + 6 * (bj < kb ? bj : bj + 1);
-            }
-            for (i = 0; i < 6; i++) bC[6 * ci + i] = src[i] - bC[6 * ci + i];
+            const double *src = ci < nAo ? bA + 6 * child_index(ci, ka) : bB + 6 * child_index(ci - nAo, kb);
+            dense_matvec6(M + 36 * ci, gamma, tmp);
+            for (i = 0; i < 6; i++) bC[6 * ci + i] = src[i] - tmp[i];
         }
     }
     return 0;
@@ -213,7 +225,8 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *x = t->data + C->xf, *M = t->data + C->M;
-    const double *W = t->data + C->W, *U = t->data + C->U, *X = t->data + C->X;
+    const double *W = t->data + C->W, *U = t->data + C->U;
+    const pose *J = (t->poses + C->J);
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *xA = t->data + A->xf, *xB = t->data + B->xf;
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
@@ -221,7 +234,11 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     double h[6], tmp[6];
 
     /* h = Phi^A_ko x_A - Phi^B_ko x_B = M^T x (eq. 4, 5) */
-    dense_tmatvec(M, x, h, 6 * C->nh, 6);
+    for (i = 0; i < 6; i++) h[i] = 0.0;
+    for (ci = 0; ci < C->nh; ci++) {
+        dense_tmatvec6(M + 36 * ci, x + 6 * ci, tmp);
+        for (i = 0; i < 6; i++) h[i] += tmp[i];
+    }
     dense_matvec(U, h, tmp, d, 6);
     for (i = 0; i < d; i++) qdd[i] = rho[i] - tmp[i];
     dense_matvec(W, h, f, 6, 6);
@@ -232,7 +249,7 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
         memcpy(xA + 6 * i, x + 6 * ci, 6 * sizeof(double));
         ci++;
     }
-    xform_force_back(X, f, tmp);
+    spatial_xform_force_back(J, f, tmp);
     for (i = 0; i < 6; i++) xA[6 * C->ka + i] = -tmp[i];
     for (i = 0; i < nB; i++) {
         if (i == C->kb) continue;

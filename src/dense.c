@@ -160,10 +160,47 @@ static int inverse_lu(const double *A, double *out, int n)
     return 0;
 }
 
+/* The 6x6 case with constant bounds, so that the compiler unrolls it: it
+ * runs once per assembly-tree node and step. */
+static int inverse_cholesky6(const double *A, double *out)
+{
+    double L[36], Li[36], dinv[6];
+    int i, j, k;
+    for (j = 0; j < 6; j++) {
+        double d = A[7 * j];
+        for (k = 0; k < j; k++) d -= L[6 * j + k] * L[6 * j + k];
+        if (!(d > 0.0)) return -1;
+        d = sqrt(d);
+        L[7 * j] = d;
+        dinv[j] = 1.0 / d;
+        for (i = j + 1; i < 6; i++) {
+            double s = A[6 * i + j];
+            for (k = 0; k < j; k++) s -= L[6 * i + k] * L[6 * j + k];
+            L[6 * i + j] = s * dinv[j];
+        }
+    }
+    for (j = 0; j < 6; j++) {
+        Li[7 * j] = dinv[j];
+        for (i = j + 1; i < 6; i++) {
+            double s = 0.0;
+            for (k = j; k < i; k++) s -= L[6 * i + k] * Li[6 * k + j];
+            Li[6 * i + j] = s * dinv[i];
+        }
+    }
+    for (i = 0; i < 6; i++)
+        for (j = 0; j <= i; j++) {
+            double s = 0.0;
+            for (k = i; k < 6; k++) s += Li[6 * k + i] * Li[6 * k + j];
+            out[6 * i + j] = s;
+            out[6 * j + i] = s;
+        }
+    return 0;
+}
+
 int dense_spd_inverse(const double *A, double *out, int n)
 {
-    int i;
-    if (inverse_cholesky(A, out, n) != 0 && inverse_lu(A, out, n) != 0) return -1;
+    int i, st = n == 6 ? inverse_cholesky6(A, out) : inverse_cholesky(A, out, n);
+    if (st != 0 && inverse_lu(A, out, n) != 0) return -1;
     for (i = 0; i < n * n; i++)
         if (!isfinite(out[i])) return -1;
     return 0;

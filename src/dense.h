@@ -23,3 +23,50 @@ void dense_symmetrize(double *A, int n);
 int dense_spd_inverse(const double *A, double *out, int n);
 
 #endif
+
+/* Fixed-size 6x6 kernels (the hot path): the compiler unrolls them. */
+static inline void dense_mul66(const double *A, const double *B, double *C)
+{
+    int i, j, l;
+    for (i = 0; i < 6; i++) {
+        double c[6] = {0, 0, 0, 0, 0, 0};
+        for (l = 0; l < 6; l++) {
+            double a = A[6 * i + l];
+            for (j = 0; j < 6; j++) c[j] += a * B[6 * l + j];
+        }
+        for (j = 0; j < 6; j++) C[6 * i + j] = c[j];
+    }
+}
+
+/* C = A B^T */
+static inline void dense_mul66_nt(const double *A, const double *B, double *C)
+{
+    int i, j, l;
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double s = 0.0;
+            for (l = 0; l < 6; l++) s += A[6 * i + l] * B[6 * j + l];
+            C[6 * i + j] = s;
+        }
+}
+
+/* y = A x */
+static inline void dense_matvec6(const double *A, const double *x, double *y)
+{
+    int i, l;
+    for (i = 0; i < 6; i++) {
+        double s = 0.0;
+        for (l = 0; l < 6; l++) s += A[6 * i + l] * x[l];
+        y[i] = s;
+    }
+}
+
+/* y = A^T x */
+static inline void dense_tmatvec6(const double *A, const double *x, double *y)
+{
+    int i, l;
+    double s[6] = {0, 0, 0, 0, 0, 0};
+    for (l = 0; l < 6; l++)
+        for (i = 0; i < 6; i++) s[i] += A[6 * l + i] * x[l];
+    for (i = 0; i < 6; i++) y[i] = s[i];
+}

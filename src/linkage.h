@@ -33,7 +33,7 @@ typedef struct {
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
     int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
     int64_t M;            /* [Phi^A_ok X^T; -Phi^B_ok] (6nh x 6) */
-    int64_t X;            /* motion transform from k's joint frame to its child frame */
+    int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
     int64_t W, U, rho, gamma, S; /* §3.4: W (6x6), U (d x 6), rho (d), gamma (6), S (6 x d) */
 } node;
 

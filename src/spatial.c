@@ -259,3 +259,49 @@ void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36]
     dense_mul(T, Xi, IG, 6, 6, 6);    /* (Xi^T IF) Xi */
     dense_symmetrize(IG, 6);
 }
+
+void spatial_xform_motion(const pose *P, const double v[6], double out[6])
+{
+    /* [R^T w; R^T (v - p x w)], written out: this runs ~20 times per node. */
+    const double *R = P->R, *p = P->p;
+    double t0 = v[3] - (p[1] * v[2] - p[2] * v[1]);
+    double t1 = v[4] - (p[2] * v[0] - p[0] * v[2]);
+    double t2 = v[5] - (p[0] * v[1] - p[1] * v[0]);
+    out[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
+    out[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
+    out[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
+    out[3] = R[0] * t0 + R[3] * t1 + R[6] * t2;
+    out[4] = R[1] * t0 + R[4] * t1 + R[7] * t2;
+    out[5] = R[2] * t0 + R[5] * t1 + R[8] * t2;
+}
+
+void spatial_xform_force_back(const pose *P, const double f[6], double out[6])
+{
+    double c[3];
+    mat3_vec(P->R, f + 3, out + 3);
+    mat3_vec(P->R, f, out);
+    vec3_cross(P->p, out + 3, c);
+    out[0] += c[0];
+    out[1] += c[1];
+    out[2] += c[2];
+}
+
+void spatial_xform_rows(const pose *P, const double *B, double *out)
+{
+    int i;
+    for (i = 0; i < 6; i++) spatial_xform_motion(P, B + 6 * i, out + 6 * i);
+}
+
+void spatial_xform_congruence(const pose *P, const double *S, double *out)
+{
+    double Y[36], YT[36];
+    int i, j;
+    spatial_xform_rows(P, S, Y); /* Y = S X^T */
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) YT[6 * j + i] = Y[6 * i + j];
+    spatial_xform_rows(P, YT, Y); /* (X S X^T)^T = X S X^T */
+    for (i = 0; i < 6; i++) {
+        out[7 * i] = Y[7 * i];
+        for (j = i + 1; j < 6; j++) out[6 * i + j] = out[6 * j + i] = 0.5 * (Y[6 * i + j] + Y[6 * j + i]);
+    }
+}

@@ -47,3 +47,13 @@ void spatial_inertia(double m, const double c[3], const double Ic[9], double I[3
 void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36]);
 
 #endif
+
+/* Structured actions of X = spatial_from_parent(P) (cheaper than 6x6 products). */
+/* out = X v (motion vector from the parent frame into P's frame). */
+void spatial_xform_motion(const pose *P, const double v[6], double out[6]);
+/* out = X^T f (force vector from P's frame back into the parent frame). */
+void spatial_xform_force_back(const pose *P, const double f[6], double out[6]);
+/* out = B X^T for a 6x6 B (each row of B mapped by X). out may not alias B. */
+void spatial_xform_rows(const pose *P, const double *B, double *out);
+/* out = X S X^T for a symmetric 6x6 S. */
+void spatial_xform_congruence(const pose *P, const double *S, double *out);
