@@ -18,6 +18,10 @@ PY=${PYTHON:-python3}
 pymissing=()
 $PY -c "import numpy" 2>/dev/null || pymissing+=(numpy)
 $PY -c "import pytest" 2>/dev/null || pymissing+=(pytest)
+# `pip install --no-build-isolation ./bindings/python` (tests/python/test_install.py)
+# needs the build backend locally: setuptools, and wheel for setuptools < 70.1.
+$PY -c "import setuptools" 2>/dev/null || pymissing+=(setuptools)
+$PY -c "import wheel" 2>/dev/null || pymissing+=(wheel)
 if [ ${#pymissing[@]} -gt 0 ]; then
     echo "deps: pip installing ${pymissing[*]}"
     $PY -m pip install -q "${pymissing[@]}"

@@ -1,0 +1,467 @@
+"""aqs -- Python ctypes bindings of libaqs (quasi-statics of articulated linkages).
+
+A thin, one-to-one mirror of the C API in include/aqs.h: every method calls
+one C function, a non-OK aqs_status raises an aqs.Error subclass carrying the
+library's last-error text, and arrays go in and out as numpy float64
+C-contiguous arrays passed to C without copies.
+
+Conventions (those of aqs.h): units are the caller's, consistent (SI
+suggested: kg, m, s, N, N m); spatial vectors are 6-vectors, angular part
+first ([omega; v] for motion, [n; f] for force); quaternions are (w, x, y, z);
+bodies and joints are int indices in the order they were added; aqs.WORLD (-1)
+is the fixed world.
+
+    import aqs
+    with aqs.Linkage() as L:
+        b = L.add_body(1.0, com=(0.5, 0, 0), inertia=[0.01, 0.01, 0.01])
+        L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
+        L.finalize()
+        L.set_gravity((0, -9.81, 0))
+        L.solve()
+        print(L.accelerations())
+
+The shared library is found through AQS_LIBRARY (a path), then a libaqs.so*
+inside this package, then the source checkout's build/, then the system
+(ctypes.util.find_library).
+"""
+
+import collections
+import ctypes
+import operator
+
+import numpy as np
+
+from . import _lib
+from ._errors import (Error, InvalidArgument, ModelError, NumericError, OutOfMemoryError,
+                      RangeError, SizeError, StateError)
+from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOINT_CYLINDRICAL,
+                   JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
+                   JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, OK, WORLD)
+from ._errors import from_status as _from_status
+
+__all__ = [
+    "Linkage", "version", "version_number", "status_string", "library_path",
+    "Error", "InvalidArgument", "RangeError", "StateError", "OutOfMemoryError", "ModelError",
+    "NumericError", "SizeError", "Sizes", "JointLayout",
+    "WORLD", "OK", "EINVAL", "ERANGE", "ESTATE", "ENOMEM", "EMODEL", "ENUMERIC", "ESIZE",
+    "JOINT_REVOLUTE", "JOINT_PRISMATIC", "JOINT_SPHERICAL", "JOINT_FREE", "JOINT_FIXED",
+    "JOINT_UNIVERSAL", "JOINT_CYLINDRICAL", "JOINT_PLANAR", "JOINT_KINDS",
+]
+
+__version__ = "0.1.0"
+
+_c = _lib.lib
+#: Path of the loaded shared library.
+library_path = _lib.path
+
+_INT32_MIN = -(2 ** 31)
+_INT32_MAX = 2 ** 31 - 1
+_F64 = np.float64
+
+Sizes = collections.namedtuple("Sizes", "bodies joints nq nv")
+Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (accelerations)."
+JointLayout = collections.namedtuple("JointLayout", "q_offset nq v_offset nv")
+JointLayout.__doc__ = ("Where a joint's values sit in the bulk arrays: q_offset/nq in "
+                       "positions(), v_offset/nv in accelerations() and joint forces.")
+
+
+def version():
+    """Version of the loaded libaqs as "MAJOR.MINOR.PATCH" (aqs_version_string)."""
+    return _c.aqs_version_string().decode()
+
+
+def version_number():
+    """Version of the loaded libaqs as MAJOR*10000 + MINOR*100 + PATCH (aqs_version)."""
+    return _c.aqs_version()
+
+
+def status_string(status):
+    """The library's fixed text for a status code (aqs_status_string)."""
+    return _c.aqs_status_string(status).decode()
+
+
+# ---------------------------------------------------------------------------
+# Argument conversion: only what ctypes needs to call C safely. Values are
+# checked by the C library; sizes that C cannot see (fixed-length arrays such
+# as com[3]) are checked here, because C would read past the end.
+# ---------------------------------------------------------------------------
+
+def _array(values, function, name, size=None):
+    """values as a float64 C-contiguous array; the same object when it already is one."""
+    try:
+        array = np.ascontiguousarray(values, dtype=_F64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument("%s: %s is not an array of numbers (%s)" % (function, name, exc))
+    if size is not None and array.size != size:
+        raise SizeError("%s: %s has %d values, expected %d" % (function, name, array.size, size))
+    return array
+
+
+def _array_or_null(values, function, name, size):
+    return None if values is None else _array(values, function, name, size)
+
+
+def _nonempty(array):
+    """NULL for an empty array (C's "n = 0 and NULL"), else the array."""
+    return array if array.size else None
+
+
+def _index(value, function, name):
+    try:
+        index = operator.index(value)
+    except TypeError:
+        raise TypeError("%s: %s must be an integer, got %r" % (function, name, value)) from None
+    if not _INT32_MIN <= index <= _INT32_MAX:
+        raise RangeError("%s: %s = %d does not fit in int32_t" % (function, name, index))
+    return index
+
+
+def _output(out, shape, function):
+    """A fresh array to be filled by C, or the caller's out (float64, C-contiguous, writable)."""
+    if out is None:
+        return np.empty(shape, dtype=_F64)
+    if not (isinstance(out, np.ndarray) and out.dtype == _F64 and out.flags.c_contiguous
+            and out.flags.writeable):
+        raise TypeError("%s: out must be a writable C-contiguous float64 numpy array" % function)
+    return out
+
+
+def _joint_kind(kind):
+    if isinstance(kind, str):
+        try:
+            return JOINT_KINDS[kind.lower()]
+        except KeyError:
+            raise InvalidArgument("aqs_joint_add: type = %r is not one of %s"
+                                  % (kind, ", ".join(sorted(JOINT_KINDS)))) from None
+    return _index(kind, "aqs_joint_add", "type")
+
+
+class Linkage:
+    """An articulated linkage: owns one aqs_linkage handle.
+
+    Build it (add_body, add_joint), finalize() it, set loads, then solve() or
+    step(). close() releases the handle (also on `with` exit and on garbage
+    collection); closing twice is fine; any other call on a closed linkage
+    raises StateError.
+    """
+
+    def __init__(self):
+        """Create an empty linkage using malloc/free (aqs_linkage_create)."""
+        self._handle = None
+        self._callbacks = None
+        handle = _lib.linkage_p()
+        status = _c.aqs_linkage_create(ctypes.byref(handle))
+        if status != OK:
+            raise _from_status(status, "aqs_linkage_create: " + status_string(status))
+        self._handle = handle
+
+    @classmethod
+    def with_allocator(cls, alloc, free):
+        """Create an empty linkage whose memory all comes from alloc/free
+        (aqs_linkage_create_with_allocator).
+
+        alloc(size) returns the address (int) of size bytes aligned for any C
+        type, or 0/None on failure; free(address) releases it. Both are kept
+        alive as long as the linkage.
+        """
+        self = cls.__new__(cls)
+        self._handle = None
+
+        def c_alloc(user, size):
+            try:
+                return alloc(size) or None
+            except Exception:  # an exception cannot cross C: report failure
+                return None
+
+        def c_free(user, ptr):
+            free(ptr)
+
+        self._callbacks = (_lib.alloc_fn(c_alloc), _lib.free_fn(c_free))
+        handle = _lib.linkage_p()
+        status = _c.aqs_linkage_create_with_allocator(self._callbacks[0], self._callbacks[1],
+                                                      None, ctypes.byref(handle))
+        if status != OK:
+            raise _from_status(status, "aqs_linkage_create_with_allocator: "
+                               + status_string(status))
+        self._handle = handle
+        return self
+
+    # -- lifetime ------------------------------------------------------------
+
+    def close(self):
+        """Destroy the linkage and release its memory (aqs_linkage_destroy). Idempotent."""
+        handle, self._handle = self._handle, None
+        if handle is not None:
+            _c.aqs_linkage_destroy(handle)
+        self._callbacks = None  # only after destroy, which may still call free
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+    def __del__(self):
+        if getattr(self, "_handle", None) is not None and _c is not None:
+            self.close()
+
+    @property
+    def closed(self):
+        """True once close() has been called."""
+        return self._handle is None
+
+    def __repr__(self):
+        if self._handle is None:
+            return "<aqs.Linkage closed>"
+        s = self.sizes()
+        return "<aqs.Linkage bodies=%d joints=%d nq=%d nv=%d>" % s
+
+    # -- plumbing --------------------------------------------------------------
+
+    def _h(self, function):
+        handle = self._handle
+        if handle is None:
+            raise StateError("%s: the linkage is closed" % function)
+        return handle
+
+    def _call(self, function, *args):
+        """Call the C function named function with the handle first; raise on failure."""
+        handle = self._h(function)
+        status = getattr(_c, function)(handle, *args)
+        if status != OK:
+            message = _c.aqs_linkage_last_error(handle).decode(errors="replace")
+            raise _from_status(status, message or "%s: %s" % (function, status_string(status)))
+
+    @property
+    def last_error(self):
+        """Message of the last failed C call on this linkage ("" if none)."""
+        return _c.aqs_linkage_last_error(self._h("aqs_linkage_last_error")).decode(
+            errors="replace")
+
+    # -- building --------------------------------------------------------------
+
+    def set_inertia_check(self, physical):
+        """Whether add_body requires physically realizable inertias (principal
+        moments obeying I1 + I2 >= I3): True (the default) or False (any
+        symmetric positive definite inertia, e.g. synthetic test models).
+        Building phase only (aqs_linkage_set_inertia_check)."""
+        self._call("aqs_linkage_set_inertia_check", 1 if physical else 0)
+
+    def add_body(self, mass, com, inertia):
+        """Add a rigid body; returns its index (aqs_body_add).
+
+        mass: kg, >= 0 (0 only if welded by fixed joints to a massive body).
+        com: (3) centre of mass in the body frame, m.
+        inertia: (3, 3) or (9) row-major, about the centre of mass, body frame,
+        kg m^2, symmetric positive definite.
+        """
+        f = "aqs_body_add"
+        com = _array(com, f, "com", 3)
+        inertia = _array(inertia, f, "inertia", 9)
+        out = ctypes.c_int32()
+        self._call(f, float(mass), com, inertia, ctypes.byref(out))
+        return out.value
+
+    def add_joint(self, kind, parent, child, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0),
+                  axis=(0.0, 0.0, 1.0)):
+        """Add a joint from parent (body index or aqs.WORLD) to child; returns its index
+        (aqs_joint_add).
+
+        kind: "revolute", "prismatic", "spherical", "free", "fixed",
+        "universal", "cylindrical", "planar", or an aqs.JOINT_* constant.
+        pos: (3) joint frame origin in the parent body frame (world frame for
+        WORLD), m. quat: (4, w x y z) joint frame orientation in the parent
+        frame. axis: (3) joint axis in the joint frame (None for spherical,
+        free and fixed joints, which ignore it). The child body frame is the
+        joint frame moved by the joint position.
+        """
+        f = "aqs_joint_add"
+        kind = _joint_kind(kind)
+        parent = _index(parent, f, "parent")
+        child = _index(child, f, "child")
+        pos = _array(pos, f, "pos", 3)
+        quat = _array(quat, f, "quat", 4)
+        axis = _array_or_null(axis, f, "axis", 3)
+        out = ctypes.c_int32()
+        self._call(f, kind, parent, child, pos, quat, axis, ctypes.byref(out))
+        return out.value
+
+    def finalize(self):
+        """Validate the linkage and build its assembly tree (aqs_linkage_finalize).
+        Raises ModelError naming the first problem; the linkage then stays editable."""
+        self._call("aqs_linkage_finalize")
+
+    def sizes(self):
+        """Sizes(bodies, joints, nq, nv) (aqs_linkage_get_sizes); any phase."""
+        b, j, nq, nv = (ctypes.c_int32() for _ in range(4))
+        self._call("aqs_linkage_get_sizes", ctypes.byref(b), ctypes.byref(j), ctypes.byref(nq),
+                   ctypes.byref(nv))
+        return Sizes(b.value, j.value, nq.value, nv.value)
+
+    @property
+    def num_bodies(self):
+        """Number of bodies added."""
+        return self.sizes().bodies
+
+    @property
+    def num_joints(self):
+        """Number of joints added."""
+        return self.sizes().joints
+
+    @property
+    def nq(self):
+        """Number of position values (length of positions())."""
+        return self.sizes().nq
+
+    @property
+    def nv(self):
+        """Number of acceleration values (length of accelerations())."""
+        return self.sizes().nv
+
+    def joint_layout(self, joint):
+        """JointLayout(q_offset, nq, v_offset, nv) of a joint (aqs_joint_get_layout)."""
+        f = "aqs_joint_get_layout"
+        qo, nq, vo, nv = (ctypes.c_int32() for _ in range(4))
+        self._call(f, _index(joint, f, "joint"), ctypes.byref(qo), ctypes.byref(nq),
+                   ctypes.byref(vo), ctypes.byref(nv))
+        return JointLayout(qo.value, nq.value, vo.value, nv.value)
+
+    def tree_stats(self):
+        """Assembly tree statistics after finalize (aqs_linkage_get_tree_stats):
+        dict(nodes, height (edges root to deepest leaf), mean_handles, max_handles)."""
+        nodes, height, max_handles = (ctypes.c_int32() for _ in range(3))
+        mean_handles = ctypes.c_double()
+        self._call("aqs_linkage_get_tree_stats", ctypes.byref(nodes), ctypes.byref(height),
+                   ctypes.byref(mean_handles), ctypes.byref(max_handles))
+        return dict(nodes=nodes.value, height=height.value, mean_handles=mean_handles.value,
+                    max_handles=max_handles.value)
+
+    # -- loads -------------------------------------------------------------------
+
+    def set_gravity(self, gravity):
+        """Gravitational acceleration (3), world frame, m/s^2 (aqs_linkage_set_gravity)."""
+        f = "aqs_linkage_set_gravity"
+        self._call(f, _array(gravity, f, "gravity", 3))
+
+    def set_body_force(self, body, force, point=None, torque=None):
+        """Set a body's external load, replacing any earlier one (aqs_body_set_force).
+
+        force: (3) world frame, N, applied at point: (3) body frame, m
+        (None = the body origin). torque: (3) pure torque, world frame, N m
+        (None = zero).
+        """
+        f = "aqs_body_set_force"
+        self._call(f, _index(body, f, "body"), _array(force, f, "force", 3),
+                   _array_or_null(point, f, "point", 3), _array_or_null(torque, f, "torque", 3))
+
+    def clear_body_force(self, body):
+        """Remove a body's external load (aqs_body_clear_force)."""
+        f = "aqs_body_clear_force"
+        self._call(f, _index(body, f, "body"))
+
+    def clear_forces(self):
+        """Remove every body load and every joint force (aqs_linkage_clear_forces)."""
+        self._call("aqs_linkage_clear_forces")
+
+    def set_joint_force(self, joint, tau):
+        """Active joint force, one value per dof (N or N m), in the layout of the
+        joint's acceleration; a scalar for 1-dof joints, () for fixed joints
+        (aqs_joint_set_force)."""
+        f = "aqs_joint_set_force"
+        joint = _index(joint, f, "joint")
+        tau = _array(tau, f, "tau")
+        self._call(f, joint, _nonempty(tau), tau.size)
+
+    # -- solving and stepping ------------------------------------------------------
+
+    def solve(self):
+        """Solve the quasi-statics at the current positions and loads (aqs_linkage_solve)."""
+        self._call("aqs_linkage_solve")
+
+    def step(self, dt):
+        """Solve, then move every joint by q <- q (+) dt^2 qdd (aqs_linkage_step).
+        dt: s, > 0. Accelerations read afterwards are those of this step's solve."""
+        self._call("aqs_linkage_step", float(dt))
+
+    # -- reading back and setting state ----------------------------------------------
+
+    def positions(self, out=None):
+        """All joint positions in joint order, (nq) (aqs_linkage_get_positions).
+        Spherical: quaternion w x y z; free: translation x y z then quaternion."""
+        f = "aqs_linkage_get_positions"
+        out = _output(out, self.sizes().nq, f)
+        self._call(f, out, out.size)
+        return out
+
+    def set_positions(self, q):
+        """Set all joint positions, (nq) in joint order (aqs_linkage_set_positions)."""
+        f = "aqs_linkage_set_positions"
+        q = _array(q, f, "q")
+        self._call(f, q, q.size)
+
+    def joint_position(self, joint):
+        """Position of one joint, (its nq) (aqs_joint_get_position)."""
+        f = "aqs_joint_get_position"
+        joint = _index(joint, f, "joint")
+        out = np.empty(self.joint_layout(joint).nq, dtype=_F64)
+        self._call(f, joint, out, out.size)
+        return out
+
+    def set_joint_position(self, joint, q):
+        """Set the position of one joint, (its nq) (aqs_joint_set_position)."""
+        f = "aqs_joint_set_position"
+        joint = _index(joint, f, "joint")
+        q = _array(q, f, "q")
+        self._call(f, joint, q, q.size)
+
+    def accelerations(self, out=None):
+        """All joint accelerations of the last solve, (nv) in joint order, m/s^2 or
+        rad/s^2 (aqs_linkage_get_accelerations). Spherical: the child's angular
+        acceleration relative to the parent side, child frame. Free: the child's
+        spatial acceleration [dw; dv] in its own body frame, gravity included."""
+        f = "aqs_linkage_get_accelerations"
+        out = _output(out, self.sizes().nv, f)
+        self._call(f, out, out.size)
+        return out
+
+    def joint_acceleration(self, joint):
+        """Acceleration of one joint of the last solve, (its nv) (aqs_joint_get_acceleration)."""
+        f = "aqs_joint_get_acceleration"
+        joint = _index(joint, f, "joint")
+        out = np.empty(self.joint_layout(joint).nv, dtype=_F64)
+        self._call(f, joint, out, out.size)
+        return out
+
+    def constraint_forces(self, out=None):
+        """Constraint forces of the last solve, (joints, 6): row j is the spatial
+        force joint j exerts on its child, child body frame about its origin,
+        [n; f] in N m and N (aqs_linkage_get_constraint_forces)."""
+        f = "aqs_linkage_get_constraint_forces"
+        out = _output(out, (self.sizes().joints, 6), f)
+        self._call(f, out, out.size)
+        return out
+
+    def joint_constraint_force(self, joint):
+        """Constraint force of one joint, (6) [n; f], child body frame
+        (aqs_joint_get_constraint_force)."""
+        f = "aqs_joint_get_constraint_force"
+        out = np.empty(6, dtype=_F64)
+        self._call(f, _index(joint, f, "joint"), out)
+        return out
+
+    def body_pose(self, body):
+        """World pose of one body after finalize (aqs_body_get_pose_world):
+        (position (3) of the body frame origin, m; quaternion (4) w x y z)."""
+        f = "aqs_body_get_pose_world"
+        pos = np.empty(3, dtype=_F64)
+        quat = np.empty(4, dtype=_F64)
+        self._call(f, _index(body, f, "body"), pos, quat)
+        return pos, quat
+
+    def body_poses(self, out=None):
+        """World poses of all bodies, (bodies, 7): row i = x y z w qx qy qz
+        (aqs_linkage_get_body_poses_world)."""
+        f = "aqs_linkage_get_body_poses_world"
+        out = _output(out, (self.sizes().bodies, 7), f)
+        self._call(f, out, out.size)
+        return out

@@ -1,0 +1,241 @@
+"""Loading libaqs and declaring its C functions (private).
+
+Everything that touches ctypes directly lives here: where the shared library
+is found, the one table of prototypes (argtypes/restype of every function in
+include/aqs.h), and the fixed constants of the header.
+"""
+
+import ctypes
+import ctypes.util
+import glob
+import os
+
+import numpy as np
+
+# ---------------------------------------------------------------------------
+# Constants copied from include/aqs.h (fixed values, never renumbered).
+# ---------------------------------------------------------------------------
+
+#: The library MAJOR version these bindings speak (AQS_VERSION_MAJOR).
+VERSION_MAJOR = 0
+
+OK = 0
+EINVAL = -1
+ERANGE = -2
+ESTATE = -3
+ENOMEM = -4
+EMODEL = -5
+ENUMERIC = -6
+ESIZE = -7
+
+STATUS_NAMES = {
+    OK: "AQS_OK",
+    EINVAL: "AQS_EINVAL",
+    ERANGE: "AQS_ERANGE",
+    ESTATE: "AQS_ESTATE",
+    ENOMEM: "AQS_ENOMEM",
+    EMODEL: "AQS_EMODEL",
+    ENUMERIC: "AQS_ENUMERIC",
+    ESIZE: "AQS_ESIZE",
+}
+
+WORLD = -1
+
+JOINT_REVOLUTE = 0
+JOINT_PRISMATIC = 1
+JOINT_SPHERICAL = 2
+JOINT_FREE = 3
+JOINT_FIXED = 4
+JOINT_UNIVERSAL = 5
+JOINT_CYLINDRICAL = 6
+JOINT_PLANAR = 7
+
+JOINT_KINDS = {
+    "revolute": JOINT_REVOLUTE,
+    "prismatic": JOINT_PRISMATIC,
+    "spherical": JOINT_SPHERICAL,
+    "free": JOINT_FREE,
+    "fixed": JOINT_FIXED,
+    "universal": JOINT_UNIVERSAL,
+    "cylindrical": JOINT_CYLINDRICAL,
+    "planar": JOINT_PLANAR,
+}
+
+# ---------------------------------------------------------------------------
+# C types
+# ---------------------------------------------------------------------------
+
+
+class aqs_linkage(ctypes.Structure):
+    """The opaque struct aqs_linkage (only ever used through a pointer)."""
+
+    _fields_ = []
+
+
+linkage_p = ctypes.POINTER(aqs_linkage)
+status_t = ctypes.c_int32
+int32_p = ctypes.POINTER(ctypes.c_int32)
+double_p = ctypes.POINTER(ctypes.c_double)
+
+alloc_fn = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t)
+free_fn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)
+
+
+def _double_array(writable, nullable):
+    """An argtype for a `double *` taking a float64 C-contiguous numpy array.
+
+    numpy.ctypeslib.ndpointer passes the array's own buffer (no copy) and
+    rejects any other dtype or layout with TypeError; the Python layer
+    converts inputs beforehand, so this is a safety net. With nullable, None
+    passes NULL.
+    """
+    flags = ("C_CONTIGUOUS", "WRITEABLE") if writable else ("C_CONTIGUOUS",)
+    base = np.ctypeslib.ndpointer(dtype=np.float64, flags=flags)
+    if not nullable:
+        return base
+
+    def from_param(cls, obj):
+        if obj is None:
+            return None
+        return base.from_param(obj)
+
+    return type(base.__name__ + "_or_NULL", (base,), {"from_param": classmethod(from_param)})
+
+
+din = _double_array(writable=False, nullable=False)  # const double *, non-NULL
+din_or_null = _double_array(writable=False, nullable=True)  # const double *, may be NULL
+dout = _double_array(writable=True, nullable=False)  # double * filled by C
+dout_or_null = _double_array(writable=True, nullable=True)
+
+# ---------------------------------------------------------------------------
+# The one table: name -> (restype, argtypes), in the order of aqs.h.
+# To add a C function, add its row here and a method in __init__.py.
+# ---------------------------------------------------------------------------
+
+PROTOTYPES = {
+    # Version
+    "aqs_version": (ctypes.c_int32, []),
+    "aqs_version_string": (ctypes.c_char_p, []),
+    # Status codes
+    "aqs_status_string": (ctypes.c_char_p, [status_t]),
+    # Creation, allocation, errors
+    "aqs_linkage_create": (status_t, [ctypes.POINTER(linkage_p)]),
+    "aqs_linkage_create_with_allocator": (
+        status_t, [alloc_fn, free_fn, ctypes.c_void_p, ctypes.POINTER(linkage_p)]),
+    "aqs_linkage_destroy": (None, [linkage_p]),
+    "aqs_linkage_last_error": (ctypes.c_char_p, [linkage_p]),
+    # Building
+    "aqs_linkage_set_inertia_check": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_body_add": (status_t, [linkage_p, ctypes.c_double, din, din, int32_p]),
+    "aqs_joint_add": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_int32, ctypes.c_int32,
+                                 din, din, din_or_null, int32_p]),
+    "aqs_linkage_finalize": (status_t, [linkage_p]),
+    "aqs_linkage_get_sizes": (status_t, [linkage_p, int32_p, int32_p, int32_p, int32_p]),
+    "aqs_joint_get_layout": (status_t, [linkage_p, ctypes.c_int32,
+                                        int32_p, int32_p, int32_p, int32_p]),
+    "aqs_linkage_get_tree_stats": (status_t, [linkage_p, int32_p, int32_p, double_p, int32_p]),
+    # Loads
+    "aqs_linkage_set_gravity": (status_t, [linkage_p, din]),
+    "aqs_body_set_force": (status_t, [linkage_p, ctypes.c_int32, din,
+                                      din_or_null, din_or_null]),
+    "aqs_body_clear_force": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_clear_forces": (status_t, [linkage_p]),
+    "aqs_joint_set_force": (status_t, [linkage_p, ctypes.c_int32, din_or_null, ctypes.c_int32]),
+    # Solving and stepping
+    "aqs_linkage_solve": (status_t, [linkage_p]),
+    "aqs_linkage_step": (status_t, [linkage_p, ctypes.c_double]),
+    # Reading back and setting state
+    "aqs_linkage_get_positions": (status_t, [linkage_p, dout_or_null, ctypes.c_size_t]),
+    "aqs_linkage_set_positions": (status_t, [linkage_p, din_or_null, ctypes.c_size_t]),
+    "aqs_joint_get_position": (status_t, [linkage_p, ctypes.c_int32, dout_or_null,
+                                          ctypes.c_int32]),
+    "aqs_joint_set_position": (status_t, [linkage_p, ctypes.c_int32, din_or_null,
+                                          ctypes.c_int32]),
+    "aqs_linkage_get_accelerations": (status_t, [linkage_p, dout_or_null, ctypes.c_size_t]),
+    "aqs_joint_get_acceleration": (status_t, [linkage_p, ctypes.c_int32, dout_or_null,
+                                              ctypes.c_int32]),
+    "aqs_linkage_get_constraint_forces": (status_t, [linkage_p, dout_or_null,
+                                                     ctypes.c_size_t]),
+    "aqs_joint_get_constraint_force": (status_t, [linkage_p, ctypes.c_int32, dout]),
+    "aqs_body_get_pose_world": (status_t, [linkage_p, ctypes.c_int32, dout, dout]),
+    "aqs_linkage_get_body_poses_world": (status_t, [linkage_p, dout_or_null, ctypes.c_size_t]),
+}
+
+# ---------------------------------------------------------------------------
+# Finding and loading the shared library
+# ---------------------------------------------------------------------------
+
+PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _candidates():
+    """Paths to try, in order, with a label saying where each came from."""
+    env = os.environ.get("AQS_LIBRARY")
+    if env:
+        # An explicit choice is final: never fall back to another library.
+        return [("AQS_LIBRARY", env)]
+    found = []
+    shipped = sorted(glob.glob(os.path.join(PACKAGE_DIR, "libaqs.so*")))
+    found += [("package directory", p) for p in shipped]
+    build = os.path.normpath(os.path.join(PACKAGE_DIR, "..", "..", "..", "build"))
+    for pattern in ("libaqs.so", "libaqs.so.%d" % VERSION_MAJOR, "libaqs.so.%d.*" % VERSION_MAJOR):
+        found += [("source checkout build/", p)
+                  for p in sorted(glob.glob(os.path.join(build, pattern)))]
+    system = ctypes.util.find_library("aqs")
+    if system:
+        found.append(("ctypes.util.find_library('aqs')", system))
+    return found
+
+
+def _load():
+    tried = []
+    candidates = _candidates()
+    for origin, path in candidates:
+        try:
+            return ctypes.CDLL(path), path
+        except OSError as exc:
+            if origin == "AQS_LIBRARY":
+                raise ImportError("aqs: cannot load the library named by AQS_LIBRARY=%r: %s"
+                                  % (path, exc)) from exc
+            tried.append("%s (%s): %s" % (path, origin, exc))
+    raise ImportError(
+        "aqs: libaqs not found. Set AQS_LIBRARY to the path of libaqs.so, ship libaqs.so in "
+        "%s, build the source checkout (make lib), or install it system-wide.%s"
+        % (PACKAGE_DIR, "".join("\n  tried " + t for t in tried)))
+
+
+def _declare(library, where):
+    for name, (restype, argtypes) in PROTOTYPES.items():
+        try:
+            function = getattr(library, name)
+        except AttributeError as exc:
+            raise ImportError("aqs: the loaded library %s lacks %s" % (where, name)) from exc
+        function.restype = restype
+        function.argtypes = argtypes
+
+
+def check_major(version_number, where):
+    """Raise ImportError unless version_number (MAJOR*10000+...) has our MAJOR."""
+    major = version_number // 10000
+    if major != VERSION_MAJOR:
+        raise ImportError(
+            "aqs: the library %s has version %d.%d.%d (major %d) but these bindings need "
+            "major %d; install matching bindings or point AQS_LIBRARY at a matching libaqs"
+            % (where, major, version_number // 100 % 100, version_number % 100, major,
+               VERSION_MAJOR))
+
+
+def _open():
+    library, where = _load()
+    # The version first, so that a library of another major is reported as
+    # such rather than as missing some function.
+    version = getattr(library, "aqs_version", None)
+    if version is None:
+        raise ImportError("aqs: %s is not libaqs (no aqs_version)" % where)
+    version.restype, version.argtypes = PROTOTYPES["aqs_version"]
+    check_major(version(), where)
+    _declare(library, where)
+    return library, where
+
+
+lib, path = _open()

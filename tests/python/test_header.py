@@ -1,0 +1,91 @@
+"""The bindings' table matches include/aqs.h: every function declared, with the
+same arity and compatible types; every constant with the same value."""
+
+import ctypes
+import os
+import re
+
+import pytest
+
+import aqs
+from aqs import _lib
+from aqs_testutil import REPO
+
+HEADER = os.path.join(REPO, "include", "aqs.h")
+
+
+@pytest.fixture(scope="module")
+def header():
+    if not os.path.isfile(HEADER):
+        pytest.skip("no include/aqs.h next to the tests")
+    with open(HEADER) as handle:
+        text = handle.read()
+    text = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)  # drop comments
+    return text
+
+
+def declarations(text):
+    """{name: (return type, [parameter types])} of every AQS_API function."""
+    found = {}
+    for match in re.finditer(r"AQS_API\s+([^;(]*?)\s*\b(aqs_\w+)\s*\(([^)]*)\)\s*;", text):
+        returns, name, params = match.groups()
+        params = [p.strip() for p in params.split(",")]
+        params = [] if params == ["void"] else params
+        types = []
+        for p in params:
+            p = re.sub(r"\s+", " ", p)
+            array = p.endswith("]")
+            p = re.sub(r"\[\d*\]$", "", p).strip()
+            p = re.sub(r"\b\w+$", "", p).strip()  # the parameter's name
+            types.append(p + (" *" if array else ""))
+        found[name] = (re.sub(r"\s+", " ", returns.strip()), types)
+    return found
+
+
+RETURNS = {"aqs_status": [_lib.status_t], "int32_t": [ctypes.c_int32],
+           "const char *": [ctypes.c_char_p], "void": [None]}
+PARAMS = {
+    "aqs_linkage *": [_lib.linkage_p], "const aqs_linkage *": [_lib.linkage_p],
+    "aqs_linkage **": [ctypes.POINTER(_lib.linkage_p)],
+    "double": [ctypes.c_double], "int32_t": [ctypes.c_int32], "size_t": [ctypes.c_size_t],
+    "aqs_status": [_lib.status_t], "void *": [ctypes.c_void_p],
+    "int32_t *": [_lib.int32_p], "const double *": [_lib.din, _lib.din_or_null],
+    "double *": [_lib.dout, _lib.dout_or_null, _lib.double_p],
+    "aqs_alloc_fn": [_lib.alloc_fn], "aqs_free_fn": [_lib.free_fn],
+}
+
+
+def normalize(c_type):
+    return re.sub(r"\s*\*", " *", c_type).replace("* *", "**").strip()
+
+
+def test_every_function_is_in_the_table(header):
+    declared = declarations(header)
+    assert len(declared) >= 30
+    assert set(declared) == set(_lib.PROTOTYPES)
+
+
+def test_prototypes_match(header):
+    for name, (returns, params) in declarations(header).items():
+        restype, argtypes = _lib.PROTOTYPES[name]
+        assert restype in RETURNS[normalize(returns)], name
+        assert len(argtypes) == len(params), name
+        for position, (c_type, argtype) in enumerate(zip(params, argtypes)):
+            assert argtype in PARAMS[normalize(c_type)], (name, position, c_type)
+        function = getattr(_lib.lib, name)
+        assert function.restype is restype and function.argtypes == argtypes
+
+
+def test_constants_match(header):
+    defines = dict(re.findall(r"#define\s+(AQS_\w+)\s+\(?(-?\d+)\)?", header))
+    assert int(defines["AQS_VERSION_MAJOR"]) == _lib.VERSION_MAJOR
+    for name, value in defines.items():
+        if name.startswith("AQS_VERSION"):
+            continue
+        short = name[len("AQS_"):]
+        if short.startswith("JOINT_"):
+            assert aqs.JOINT_KINDS[short[len("JOINT_"):].lower()] == int(value), name
+        assert getattr(aqs, short) == int(value), name
+    codes = {int(v) for k, v in defines.items() if k in ("AQS_OK",) or k.startswith("AQS_E")}
+    assert codes == set(_lib.STATUS_NAMES)
+    assert set(aqs._errors.BY_STATUS) == codes - {0}
