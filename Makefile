@@ -62,26 +62,31 @@ $(DEPS_STAMP): tools/deps.sh
 
 $(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) include/aqs.h | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_LIB) -c $< -o $@
+	@echo "  CC      $<"
+	@$(CC) $(CFLAGS_LIB) -c $< -o $@
 
 $(SHLIB): $(OBJS) src/aqs.map
-	$(CC) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=src/aqs.map -Wl,--no-undefined \
+	@echo "  LD      $@"
+	@$(CC) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=src/aqs.map -Wl,--no-undefined \
 	    $(SANFLAGS) -o $@ $(OBJS) $(LDLIBS)
-	ln -sf libaqs.so.$(VERSION) $(BUILD)/$(SONAME)
-	ln -sf $(SONAME) $(BUILD)/libaqs.so
+	@ln -sf libaqs.so.$(VERSION) $(BUILD)/$(SONAME)
+	@ln -sf $(SONAME) $(BUILD)/libaqs.so
 
 $(STLIB): $(OBJS)
-	rm -f $@
-	ar rcs $@ $(OBJS)
+	@echo "  AR      $@"
+	@rm -f $@
+	@ar rcs $@ $(OBJS)
 
 # C unit tests link the static library so they can reach internal functions.
 $(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(STLIB)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS_TEST) -Itests/support -o $@ $< $(TEST_SUPPORT) $(STLIB) -lcmocka $(LDLIBS)
+	@echo "  CC      $<"
+	@$(CC) $(CFLAGS_TEST) -Itests/support -o $@ $< $(TEST_SUPPORT) $(STLIB) -lcmocka $(LDLIBS)
 
 $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
+	@echo "  CXX     $<"
+	@$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
 check: check-symbols check-c check-reference check-python check-install
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"

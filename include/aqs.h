@@ -153,8 +153,9 @@ AQS_API aqs_status aqs_body_add(aqs_linkage *linkage, double mass, const double 
  *  smallest component (the first such), u = normalize(e - (e.a) a) and
  *  v = a x u, so (u, v, a) is right-handed; for a = z this is (x, y, z).
  *  out_joint: receives the new joint index (may be NULL).
- *  Topology (one parent joint per body, no cycles, connected, free joints
- *  only from the world) is checked at finalize.
+ *  A free joint whose parent is not AQS_WORLD is rejected here (AQS_EINVAL).
+ *  Topology (one parent joint per body, no cycles, connected) is checked at
+ *  finalize.
  *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_joint_add(aqs_linkage *linkage, int32_t type, int32_t parent,
                                  int32_t child, const double pos[3], const double quat[4],
@@ -163,7 +164,7 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *linkage, int32_t type, int32_t par
 /** Validate the linkage and build the assembly tree and all coefficients.
  *  Checks, reporting the first problem by body/joint index (AQS_EMODEL):
  *  at least one body; each body the child of exactly one joint; every body
- *  connected to the world (no cycles); free joints only from the world; every
+ *  connected to the world (no cycles); every
  *  rigid group formed by fixed joints with positive mass and a positive
  *  definite inertia (unless welded to the world).
  *  Returns AQS_OK, AQS_EMODEL, AQS_ESTATE (already finalized), AQS_ENOMEM,
@@ -222,12 +223,16 @@ AQS_API aqs_status aqs_joint_set_force(aqs_linkage *linkage, int32_t joint, cons
  * Solving and stepping (after finalize)
  * ---------------------------------------------------------------------- */
 
-/** Solve the quasi-statics at the current positions and loads: every joint
- *  acceleration, the floating bases' accelerations, and every joint's
- *  constraint force. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
+/** Solve the quasi-statics at the current positions and loads. Exact by
+ *  default: every joint acceleration, the floating bases' accelerations and
+ *  every joint's constraint force. With a tolerance (aqs_linkage_set_tolerance)
+ *  only the joints that matter are computed; the others read 0 (acceleration)
+ *  and NaN (constraint force). Only the assembly-tree nodes made stale by
+ *  changed positions or loads are recomputed first (aqs_solve_stats).
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
 AQS_API aqs_status aqs_linkage_solve(aqs_linkage *linkage);
 
-/** Solve, then move every joint by q <- q (+) dt^2 * qdd (on the rotation
+/** Solve, then move every computed joint by q <- q (+) dt^2 * qdd (on the rotation
  *  group for spherical and free joints: the increment is a rotation vector in
  *  the child frame; a free joint's translation moves by its body-frame
  *  increment rotated into the joint frame), then update the coefficients.
@@ -235,6 +240,69 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *linkage);
  *  start of the step. dt: s, finite, > 0.
  *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
 AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
+
+/* ------------------------------------------------------------------------
+ * Error-bounded adaptive solving (Redon & Lin; MATH.md §4-6)
+ * ---------------------------------------------------------------------- */
+
+/** Error measures (the paper's Definition 2), over the joints that are not
+ *  computed (their acceleration is reported as 0). A joint's error is the
+ *  2-norm of its acceleration vector. Free joints (floating bases) are not
+ *  part of the measure: they are always computed exactly. */
+#define AQS_METRIC_ABS_LINKAGE 0 /**< sqrt(sum of ||qdd_j||^2 over uncomputed j) */
+#define AQS_METRIC_REL_LINKAGE 1 /**< the above / sqrt(sum over all joints) */
+#define AQS_METRIC_ABS_JOINT 2   /**< max ||qdd_j|| over uncomputed j */
+#define AQS_METRIC_REL_JOINT 3   /**< the above / max ||qdd_j|| over all joints */
+
+/** Set the error measure and its bound eps (finite, >= 0; 0, the default,
+ *  means exact: every joint is computed). With eps > 0 a solve computes only
+ *  the joints that matter, in decreasing order of their subassemblies' total
+ *  acceleration, until the certified bound is <= eps. The first eps > 0
+ *  allocates the total-acceleration factors (O(N) memory) and schedules their
+ *  computation at the next solve. Any phase after finalize.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *linkage, int32_t metric, double eps);
+
+/** Anytime control: stop a solve once max_joints joint accelerations are
+ *  computed (0, the default, means no cap), reporting the bound reached.
+ *  Joints on the path to a floating base may exceed the cap. A cap with
+ *  eps = 0 also uses the adaptive solver. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *linkage, int32_t max_joints);
+
+/** Refine the last solve down to a smaller eps (same measure) by continuing
+ *  its priority queue instead of starting over. Valid only right after a
+ *  solve or refine, before anything changes positions or loads; otherwise
+ *  AQS_ESTATE. eps >= the bound already reached does nothing. The cap of
+ *  aqs_linkage_set_max_computed still applies. Returns AQS_OK, AQS_EINVAL,
+ *  AQS_ESTATE. */
+AQS_API aqs_status aqs_linkage_refine(aqs_linkage *linkage, double eps);
+
+/** Statistics of the last solve. The caller sets size = sizeof(aqs_solve_stats);
+ *  the library fills only the fields that size covers (so callers built
+ *  against an older header keep working). */
+typedef struct aqs_solve_stats {
+    uint32_t size;           /**< set by the caller: sizeof(aqs_solve_stats) */
+    int32_t metric;          /**< AQS_METRIC_* in force */
+    double eps;              /**< the bound asked for (0 = exact) */
+    double error_bound;      /**< certified bound on the measure achieved (0 when exact) */
+    int32_t computed_joints; /**< N_E: joint accelerations computed (free joints excluded) */
+    int32_t counted_joints;  /**< joints that count for the measures (all but free joints) */
+    int32_t nodes_updated;   /**< assembly-tree nodes recomputed by the last coefficient update */
+    int32_t nodes_processed; /**< internal nodes back-substituted by the last solve */
+    int32_t capped;          /**< 1 if the last solve stopped at the max_computed cap */
+    int32_t reserved;        /**< 0 */
+} aqs_solve_stats;
+
+/** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,
+ *  AQS_EINVAL, AQS_ESTATE (no solve yet). */
+AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *linkage, aqs_solve_stats *stats);
+
+/** Whether the last solve computed joint j: *computed = 1 or 0. An
+ *  uncomputed joint reads acceleration 0 and constraint force NaN (a fixed
+ *  joint's force is available when its rigid group was reached).
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ESTATE. */
+AQS_API aqs_status aqs_joint_get_computed(const aqs_linkage *linkage, int32_t joint,
+                                          int32_t *computed);
 
 /* ------------------------------------------------------------------------
  * Reading back and setting state
@@ -269,7 +337,8 @@ AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *linkage, int32_
 
 /** Constraint forces of the last solve: (joints x 6), row j the spatial force
  *  joint j exerts on its child, in the child body frame about its origin,
- *  torque first, [n; f] in N m and N. n >= 6 * joints.
+ *  torque first, [n; f] in N m and N; NaN rows for joints the last
+ *  (adaptive) solve did not compute. n >= 6 * joints.
  *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ESIZE. */
 AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *linkage, double *f,
                                                      size_t n);

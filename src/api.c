@@ -6,11 +6,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
 #include "dca.h"
 #include "linkage.h"
 #include "model.h"
+#include "totalacc.h"
 #include "update.h"
 
 #define STR2(x) #x
@@ -155,6 +157,8 @@ AQS_API aqs_status aqs_linkage_create(aqs_linkage **out)
 
 static void free_solver(aqs_linkage *L)
 {
+    adaptive_free(L);
+    totalacc_free(L);
     assembly_free(L);
     model_free(L);
     lk_free(L, L->qdd);
@@ -373,7 +377,8 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     L->q_saved = lk_calloc(L, (size_t)L->nq + 1, sizeof(double));
     L->welded_acc = lk_calloc(L, 6 * ((size_t)L->nbodies + L->m.ncomp + 2), sizeof(double));
     L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
-    if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world) {
+    if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world ||
+        adaptive_alloc(L) != AQS_OK) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
@@ -383,7 +388,11 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
             dca_leaf_phi(L, n);
         }
     update_all_poses(L);
-    L->coeffs_dirty = L->loads_dirty = 1;
+    update_mark_all(L);
+    if (L->s.eps > 0.0 && (st = totalacc_enable(L)) != AQS_OK) {
+        free_solver(L);
+        return st;
+    }
     if ((st = update_coefficients(L)) != AQS_OK) {
         free_solver(L);
         return st;
@@ -441,7 +450,8 @@ AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *L, const double gravity[
     CHECK_LINKAGE(L);
     if ((st = check_vec(L, "aqs_linkage_set_gravity", "gravity", gravity, 3)) != AQS_OK) return st;
     memcpy(L->gravity, gravity, sizeof L->gravity);
-    L->loads_dirty = 1;
+    L->gravity_dirty = 1;
+    L->s.valid = 0;
     return AQS_OK;
 }
 
@@ -466,6 +476,7 @@ AQS_API aqs_status aqs_body_set_force(aqs_linkage *L, int32_t body, const double
         L->loaded_bodies[L->nloaded++] = body;
     }
     L->loads_dirty = 1;
+    L->s.valid = 0;
     return AQS_OK;
 }
 
@@ -479,6 +490,7 @@ static void remove_load(aqs_linkage *L, int32_t body)
     L->load_slot[body] = -1;
     memset(&L->loads[body], 0, sizeof(body_load));
     L->loads_dirty = 1;
+    L->s.valid = 0;
 }
 
 AQS_API aqs_status aqs_body_clear_force(aqs_linkage *L, int32_t body)
@@ -495,8 +507,9 @@ AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *L)
     CHECK_LINKAGE(L);
     while (L->nloaded > 0) remove_load(L, L->loaded_bodies[L->nloaded - 1]);
     if (L->nv > 0) memset(L->tau, 0, sizeof(double) * (size_t)L->nv);
+    if (L->finalized) update_mark_all(L);
     L->loads_dirty = 1;
-    L->coeffs_dirty = 1;
+    L->s.valid = 0;
     return AQS_OK;
 }
 
@@ -514,32 +527,47 @@ AQS_API aqs_status aqs_joint_set_force(aqs_linkage *L, int32_t joint, const doub
     if (nv == 0) return AQS_OK;
     if ((st = check_vec(L, fn, "tau", tau, nv)) != AQS_OK) return st;
     memcpy(L->tau + L->joints[joint].voff, tau, sizeof(double) * (size_t)nv);
-    L->coeffs_dirty = 1;
+    if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[joint]]);
+    L->s.valid = 0;
     return AQS_OK;
 }
 
 /* ---------------------------------------------------------------- solving */
 
+static aqs_status check_joint_outputs(aqs_linkage *L, const char *fn, int32_t j)
+{
+    const joint_def *jd = &L->joints[j];
+    int bad;
+    if (!finite_n(L->qdd + jd->voff, joint_nv(jd->type), &bad))
+        return lk_fail(L, AQS_ENUMERIC, "%s: the acceleration of joint %d came out non-finite", fn, (int)j);
+    if (!finite_n(L->cforce + 6 * j, 6, &bad))
+        return lk_fail(L, AQS_ENUMERIC, "%s: the constraint force of joint %d came out non-finite", fn, (int)j);
+    return AQS_OK;
+}
+
+/* Non-finite numbers are never returned silently: check what was computed. */
 static aqs_status check_outputs(aqs_linkage *L, const char *fn)
 {
-    int bad;
-    if (!finite_n(L->qdd, L->nv, &bad))
-        return lk_fail(L, AQS_ENUMERIC, "%s: acceleration %d came out non-finite", fn, bad);
-    if (!finite_n(L->cforce, 6 * L->njoints, &bad))
-        return lk_fail(L, AQS_ENUMERIC, "%s: constraint force of joint %d came out non-finite", fn, bad / 6);
-    return AQS_OK;
+    const solve_state *s = &L->s;
+    aqs_status st = AQS_OK;
+    int32_t i;
+    if (s->all) {
+        for (i = 0; i < L->njoints && st == AQS_OK; i++) st = check_joint_outputs(L, fn, i);
+    } else {
+        for (i = 0; i < s->nprocessed && st == AQS_OK; i++)
+            st = check_joint_outputs(L, fn, L->m.eff_joint[L->t.nodes[s->processed[i]].joint]);
+    }
+    return st;
 }
 
 static aqs_status solve(aqs_linkage *L, const char *fn)
 {
     aqs_status st;
-    int32_t n;
     if ((st = update_coefficients(L)) != AQS_OK) return st;
-    for (n = L->t.nnodes - 1; n >= 0; n--)
-        if (L->t.nodes[n].joint >= 0) dca_node_backsub(L, n);
-    dca_welded_forces(L);
+    adaptive_solve(L);
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         L->solved = 0;
+        L->s.valid = 0;
         return st;
     }
     L->solved = 1;
@@ -555,42 +583,147 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
     return solve(L, fn);
 }
 
+/* Save (or restore) the positions a step moves: all of them after an exact
+ * solve, the computed joints' after an adaptive one. */
+static void copy_moved_positions(aqs_linkage *L, double *dst, const double *src)
+{
+    const solve_state *s = &L->s;
+    int32_t i;
+    if (s->all) {
+        memcpy(dst, src, sizeof(double) * (size_t)L->nq);
+        return;
+    }
+    for (i = 0; i < s->nprocessed; i++) {
+        const joint_def *jd = &L->joints[L->m.eff_joint[L->t.nodes[s->processed[i]].joint]];
+        memcpy(dst + jd->qoff, src + jd->qoff, sizeof(double) * (size_t)joint_nq(jd->type));
+    }
+}
+
 AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
 {
     static const char fn[] = "aqs_linkage_step";
     aqs_status st;
-    int32_t e;
-    double h;
-    int bad;
+    int32_t i;
     CHECK_LINKAGE(L);
     if ((st = need_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
     if ((st = solve(L, fn)) != AQS_OK) return st;
-    h = dt * dt;
-    memcpy(L->q_saved, L->q, sizeof(double) * (size_t)L->nq);
-    for (e = 0; e < L->m.ne; e++) {
-        const joint_def *jd = &L->joints[L->m.eff_joint[e]];
-        joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
-    }
-    st = finite_n(L->q, L->nq, &bad) ? AQS_OK
-                                      : lk_fail(L, AQS_ENUMERIC, "%s: position %d became non-finite", fn, bad);
-    if (st == AQS_OK) {
-        update_all_poses(L);
-        L->coeffs_dirty = L->loads_dirty = 1; /* world-frame loads re-expressed */
-        st = update_coefficients(L);
-    }
+    copy_moved_positions(L, L->q_saved, L->q);
+    adaptive_integrate(L, dt * dt);
+    for (i = 0; i < L->nq && st == AQS_OK; i++)
+        if (!isfinite(L->q[i]))
+            st = lk_fail(L, AQS_ENUMERIC, "%s: position value %d became non-finite", fn, (int)i);
+    if (st == AQS_OK) st = update_coefficients(L);
     if (st != AQS_OK) {
         /* Undo: back to the positions before the step, which solved fine. */
         char msg[sizeof L->error];
         memcpy(msg, L->error, sizeof msg);
-        memcpy(L->q, L->q_saved, sizeof(double) * (size_t)L->nq);
+        copy_moved_positions(L, L->q, L->q_saved);
         update_all_poses(L);
-        L->coeffs_dirty = L->loads_dirty = 1;
+        update_mark_all(L);
+        L->loads_dirty = 1;
         (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
     return st;
+}
+
+AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, double eps)
+{
+    static const char fn[] = "aqs_linkage_set_tolerance";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_JOINT)
+        return lk_fail(L, AQS_EINVAL, "%s: metric = %d is not an AQS_METRIC_* value", fn, (int)metric);
+    if (!isfinite(eps) || eps < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
+    if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
+        if ((st = totalacc_enable(L)) != AQS_OK) return st;
+        update_mark_all(L);
+    }
+    L->s.metric = metric;
+    L->s.eps = eps;
+    L->s.valid = 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_joints)
+{
+    static const char fn[] = "aqs_linkage_set_max_computed";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if (max_joints < 0)
+        return lk_fail(L, AQS_EINVAL, "%s: max_joints = %d must be >= 0", fn, (int)max_joints);
+    if (max_joints > 0 && !L->t.tdata && L->t.nnodes > 0) {
+        if ((st = totalacc_enable(L)) != AQS_OK) return st;
+        update_mark_all(L);
+        L->s.valid = 0;
+    }
+    L->s.max_computed = max_joints;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_refine(aqs_linkage *L, double eps)
+{
+    static const char fn[] = "aqs_linkage_refine";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    if (!isfinite(eps) || eps < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
+    if (!L->s.valid)
+        return lk_fail(L, AQS_ESTATE,
+                       "%s: positions, loads or the tolerance changed since the last solve; solve again", fn);
+    if (L->s.all || eps >= L->s.bound) return AQS_OK;
+    adaptive_refine(L, eps);
+    L->s.eps = eps;
+    if ((st = check_outputs(L, fn)) != AQS_OK) {
+        L->solved = 0;
+        L->s.valid = 0;
+    }
+    return st;
+}
+
+AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats *stats)
+{
+    static const char fn[] = "aqs_linkage_get_stats";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_solve_stats full;
+    aqs_status st;
+    uint32_t size;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, stats);
+    size = stats->size;
+    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    memset(&full, 0, sizeof full);
+    full.size = size;
+    full.metric = L->s.metric;
+    full.eps = L->s.eps;
+    full.error_bound = L->s.all ? 0.0 : L->s.bound;
+    full.computed_joints = L->s.all ? L->s.counted : L->s.computed;
+    full.counted_joints = L->s.counted;
+    full.nodes_updated = L->t.nodes_updated;
+    full.nodes_processed = L->s.nprocessed;
+    full.capped = L->s.capped;
+    memcpy(stats, &full, size < sizeof full ? size : sizeof full);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_joint_get_computed(const aqs_linkage *cL, int32_t joint, int32_t *computed)
+{
+    static const char fn[] = "aqs_joint_get_computed";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
+    if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, computed);
+    *computed = !isnan(L->cforce[6 * (size_t)joint]);
+    return AQS_OK;
 }
 
 /* ---------------------------------------------------------------- reading */
@@ -624,10 +757,16 @@ static aqs_status check_joint_position(aqs_linkage *L, const char *fn, int32_t j
 static void positions_changed(aqs_linkage *L, int32_t joint)
 {
     if (!L->finalized) return;
-    if (joint < 0) update_all_poses(L);
-    else if (L->m.eff_of_joint[joint] >= 0) update_poses_from_joint(L, L->m.eff_of_joint[joint]);
-    L->coeffs_dirty = 1;
+    if (joint < 0) {
+        update_all_poses(L);
+        update_mark_all(L);
+    } else if (L->m.eff_of_joint[joint] >= 0) {
+        int32_t e = L->m.eff_of_joint[joint];
+        update_poses_from_joint(L, e);
+        update_mark(L, L->t.node_of_eff[e]);
+    }
     L->loads_dirty = 1;
+    L->s.valid = 0;
 }
 
 AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, size_t n)

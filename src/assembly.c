@@ -167,6 +167,8 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->node_of_eff);
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);
+    lk_free(L, t->stamp);
+    lk_free(L, t->dirty);
     memset(t, 0, sizeof *t);
     t->root = -1;
 }
@@ -253,7 +255,13 @@ aqs_status assembly_build(aqs_linkage *L)
     t->max_handles = 0;
     for (i = 0; i < t->nnodes; i++) {
         node *n = &t->nodes[i];
-        if (n->joint >= 0) t->node_of_eff[n->joint] = i;
+        if (n->joint >= 0) {
+            /* children come first: their counts are final */
+            int free_joint = L->joints[m->eff_joint[n->joint]].type == AQS_JOINT_FREE;
+            t->node_of_eff[n->joint] = i;
+            n->ncount = t->nodes[n->a].ncount + t->nodes[n->b].ncount + (free_joint ? 0 : 1);
+            n->forced = free_joint || t->nodes[n->a].forced || t->nodes[n->b].forced;
+        }
         if (n->nh > t->max_handles) t->max_handles = n->nh;
         total_h += n->nh;
     }
@@ -263,7 +271,11 @@ aqs_status assembly_build(aqs_linkage *L)
     t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
     t->scratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 2), sizeof(double));
-    if (!t->poses || !t->data || !t->scratch) goto fail;
+    t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
+    t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
+    t->epoch = 1;
+    t->all_dirty = 1;
+    if (!t->poses || !t->data || !t->scratch || !t->stamp || !t->dirty) goto fail;
     lk_free(L, B.uf);
     lk_free(L, B.uf_node);
     lk_free(L, cursor);

@@ -92,11 +92,6 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
     }
 }
 
-/* X^T f for a motion transform X (6x6): the force transform back. */
-static void xform_force_back(const double X[36], const double f[6], double out[6])
-{
-    dense_tmatvec(X, f, out, 6, 6);
-}
 
 /* Index among a child's handles of the outer handle at position c of the
  * merged list [A-outer; B-outer]. */
@@ -267,7 +262,7 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
     const node *nd;
     const pose *P;
     const double *x;
-    double f[6], X[36], tmp[6];
+    double f[6], tmp[6];
     int32_t h, i;
     if (c == L->m.ncomp) {
         a[0] = a[1] = a[2] = 0.0;
@@ -279,8 +274,7 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
     x = t->data + nd->xf;
     memcpy(f, L->m.comp_force + 6 * c, sizeof f);
     for (h = 0; h < nd->nh; h++) {
-        spatial_from_parent(&P[h], X);
-        xform_force_back(X, x + 6 * h, tmp);
+        spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
     }
     dense_matvec(L->m.comp_inverse + 36 * c, f, a, 6, 6);
@@ -288,55 +282,51 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
 
 /* Newton's law on each welded subtree S hanging from fixed joint j:
  * f_j = sum_{i in S} (I_i a'_i - f_i) + sum_{joints e leaving S} f_e,
- * accumulated children first in the composite's frame (MATH.md §2). */
-void dca_welded_forces(aqs_linkage *L)
+ * accumulated children first in the composite's frame (MATH.md §2). The
+ * forces f_e of the moving joints held by the composite come from its
+ * leaf's handle forces (f_e = -x_h in e's joint frame), so only the leaf's
+ * forces are needed. */
+void dca_welded_forces_comp(aqs_linkage *L, int32_t c)
 {
     const model *m = &L->m;
-    double *acc = L->welded_acc, *ca = L->welded_acc + 6 * L->nbodies;
-    unsigned char *has = (unsigned char *)(ca + 6 * (m->ncomp + 1));
-    int32_t k, c, e, i;
-    if (m->nwelded == 0) return;
-    memset(has, 0, (size_t)m->ncomp + 1);
-    for (k = 0; k < L->nbodies; k++) {
-        int32_t b = m->order[k];
-        if (L->joints[m->parent_joint[b]].type == AQS_JOINT_FIXED) has[m->comp_of_body[b]] = 1;
-    }
-    for (c = 0; c <= m->ncomp; c++)
-        if (has[c]) comp_acceleration(L, c, ca + 6 * c);
-    for (k = 0; k < L->nbodies; k++) memset(acc + 6 * k, 0, 6 * sizeof(double));
-    /* Forces of the moving joints held by welded composites. */
-    for (e = 0; e < m->ne; e++) {
-        int32_t j = m->eff_joint[e], p = L->joints[j].parent;
-        pose J, Pc;
-        double Xi[36], fc[6];
-        if (p < 0 || !has[m->eff_parent[e]]) continue;
-        joint_child_pose(&L->joints[j], L->q + L->joints[j].qoff, &J);
-        pose_compose(&m->eff_place[e], &J, &Pc);
-        spatial_from_parent(&Pc, Xi);
-        dense_tmatvec(Xi, L->cforce + 6 * j, fc, 6, 6);
+    const tree *t = &L->t;
+    const node *leaf = &t->nodes[t->leaf_of_comp[c]];
+    const pose *P = t->poses + leaf->poses;
+    const double *x = t->data + leaf->xf;
+    double *acc = L->welded_acc, ca[6];
+    int32_t k, h, i, first = m->member_start[c], last = m->member_start[c + 1];
+    pose Pc;
+    int have_pose = 0;
+    comp_acceleration(L, c, ca);
+    for (k = first; k < last; k++) memset(acc + 6 * m->members[k], 0, 6 * sizeof(double));
+    for (h = 0; h < leaf->nh; h++) {
+        int32_t e = t->handles[leaf->handles + h], p = L->joints[m->eff_joint[e]].parent;
+        double fe[6], fc[6];
+        if (m->eff_child[e] == c || p < 0) continue; /* the composite's own parent joint */
+        for (i = 0; i < 6; i++) fe[i] = -x[6 * h + i];
+        spatial_xform_force_back(&P[h], fe, fc);
         for (i = 0; i < 6; i++) acc[6 * p + i] += fc[i];
     }
-    for (k = L->nbodies - 1; k >= 0; k--) {
-        int32_t b = m->order[k], pj = m->parent_joint[b];
+    for (k = last - 1; k >= first; k--) {
+        int32_t b = m->members[k], pj = m->parent_joint[b];
         const joint_def *jd = &L->joints[pj];
-        double Ib[36], Ic[36], w[6], Xm[36];
-        c = m->comp_of_body[b];
-        if (!has[c]) continue;
+        double Ib[36], Ic[36], w[6];
         model_body_inertia(L, b, Ib);
         spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
-        dense_matvec(Ic, ca + 6 * c, w, 6, 6);
+        dense_matvec6(Ic, ca, w);
         for (i = 0; i < 6; i++) acc[6 * b + i] += w[i];
         if (L->load_slot[b] >= 0) {
-            pose Pc;
             double fb[6];
-            update_comp_pose_world(L, c, &Pc);
+            if (!have_pose) {
+                update_comp_pose_world(L, c, &Pc);
+                have_pose = 1;
+            }
             update_body_load_in_comp(L, b, &Pc, fb);
             for (i = 0; i < 6; i++) acc[6 * b + i] -= fb[i];
         }
         if (jd->type != AQS_JOINT_FIXED) continue;
-        /* In b's frame about its origin: X^T with X the motion transform b -> composite. */
-        spatial_to_parent(&m->body_in_comp[b], Xm);
-        dense_tmatvec(Xm, acc + 6 * b, L->cforce + 6 * pj, 6, 6);
+        /* In b's frame about its origin. */
+        spatial_force_from_parent(&m->body_in_comp[b], acc + 6 * b, L->cforce + 6 * pj);
         if (jd->parent >= 0)
             for (i = 0; i < 6; i++) acc[6 * jd->parent + i] += acc[6 * b + i];
     }

@@ -17,8 +17,8 @@ int dca_node_update(aqs_linkage *L, int32_t n);
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces. */
 void dca_node_backsub(aqs_linkage *L, int32_t n);
-/* Constraint forces of the fixed joints inside every rigid group, from the
- * leaves' handle forces (after a complete back-substitution). */
-void dca_welded_forces(aqs_linkage *L);
+/* Constraint forces of the fixed joints inside composite c, from its leaf's
+ * handle forces (set when the leaf's parent node was back-substituted). */
+void dca_welded_forces_comp(aqs_linkage *L, int32_t c);
 
 #endif

@@ -205,3 +205,40 @@ int dense_spd_inverse(const double *A, double *out, int n)
         if (!isfinite(out[i])) return -1;
     return 0;
 }
+
+int dense_qr_r(double *A, int m, int n)
+{
+    int k, i, j, r = m < n ? m : n;
+    for (k = 0; k < r; k++) {
+        double norm = 0.0, alpha, v0, vnorm2, scale = 0.0;
+        for (i = k; i < m; i++) {
+            double a = fabs(A[(long)i * n + k]);
+            if (a > scale) scale = a;
+        }
+        if (scale == 0.0) continue; /* the column is already zero below k */
+        for (i = k; i < m; i++) {
+            double a = A[(long)i * n + k] / scale;
+            norm += a * a;
+        }
+        norm = scale * sqrt(norm);
+        alpha = A[(long)k * n + k] > 0 ? -norm : norm;
+        /* v = x - alpha e1, stored in column k below the diagonal and v0. */
+        v0 = A[(long)k * n + k] - alpha;
+        vnorm2 = v0 * v0;
+        for (i = k + 1; i < m; i++) vnorm2 += A[(long)i * n + k] * A[(long)i * n + k];
+        if (vnorm2 > 0.0) {
+            for (j = k + 1; j < n; j++) {
+                double s = v0 * A[(long)k * n + j];
+                for (i = k + 1; i < m; i++) s += A[(long)i * n + k] * A[(long)i * n + j];
+                s = 2.0 * s / vnorm2;
+                A[(long)k * n + j] -= s * v0;
+                for (i = k + 1; i < m; i++) A[(long)i * n + j] -= s * A[(long)i * n + k];
+            }
+        }
+        A[(long)k * n + k] = alpha;
+        for (i = k + 1; i < m; i++) A[(long)i * n + k] = 0.0;
+    }
+    for (k = 0; k < r; k++)
+        for (j = 0; j < k; j++) A[(long)k * n + j] = 0.0;
+    return r;
+}

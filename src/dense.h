@@ -70,3 +70,8 @@ static inline void dense_tmatvec6(const double *A, const double *x, double *y)
         for (i = 0; i < 6; i++) s[i] += A[6 * l + i] * x[l];
     for (i = 0; i < 6; i++) y[i] = s[i];
 }
+
+/* Householder QR of the m x n row-major matrix A, in place: on return the
+ * first min(m, n) rows hold the upper-trapezoidal R (entries below the
+ * diagonal zeroed); the other rows are garbage. Returns min(m, n). */
+int dense_qr_r(double *A, int m, int n);

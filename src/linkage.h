@@ -35,6 +35,10 @@ typedef struct {
     int64_t M;            /* [Phi^A_ok X^T; -Phi^B_ok] (6nh x 6) */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
     int64_t W, U, rho, gamma, S; /* §3.4: W (6x6), U (d x 6), rho (d), gamma (6), S (6 x d) */
+    int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
+    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
+    int32_t ncount;       /* counted joints inside the node (every one but free joints) */
+    int32_t forced;       /* the node or a descendant holds a free joint: always computed */
 } node;
 
 typedef struct {
@@ -50,7 +54,17 @@ typedef struct {
     int32_t *leaf_of_comp; /* ncomp + 1 */
     int32_t height, max_handles;
     double mean_handles;
-    double *scratch; /* 36 * max_handles doubles */
+    double *scratch; /* 36 * (max_handles + 2) doubles */
+    /* Total-acceleration factors, allocated when adaptive solving is first used. */
+    double *tdata;
+    double *tscratch; /* the stacked matrix of one node */
+    /* Lazy update: nodes whose coefficients are stale (top-closed set). */
+    uint32_t *stamp;
+    uint32_t epoch;
+    int32_t *dirty;
+    int32_t ndirty;
+    int all_dirty;
+    int32_t nodes_updated; /* by the last update */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -75,7 +89,35 @@ typedef struct {
     int32_t *parent_joint;  /* nbodies: the joint whose child the body is */
     int32_t *order;         /* nbodies: parents before children */
     int32_t nwelded;        /* bodies that are not the root of their composite */
+    int32_t *members;       /* nbodies: bodies grouped by composite, parents first */
+    int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
+    unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
 } model;
+
+/* State of the last solve (adaptive back-substitution, MATH.md §6). */
+typedef struct {
+    int32_t metric;       /* AQS_METRIC_* */
+    double eps;           /* 0 = exact */
+    int32_t max_computed; /* 0 = no cap */
+    int enabled;          /* total-acceleration factors are maintained */
+    /* results */
+    int all;              /* the last solve computed every joint (exact path) */
+    int valid;            /* heap and processed list are those of the last solve */
+    int32_t *processed;   /* internal nodes processed, in order */
+    int32_t nprocessed;
+    int32_t *reached;     /* composites with welded bodies whose leaf got its forces */
+    int32_t nreached;
+    double *heap_key;
+    int32_t *heap_item;
+    int32_t heap_size;
+    double sum;           /* running sum of the queued A values (eps_c^2) */
+    double a_root;        /* A(root) */
+    double lower;         /* L: lower bound on max_j ||qdd_j|| */
+    int32_t computed;     /* counted joints computed: N_E */
+    int32_t counted;      /* counted joints in the linkage */
+    double bound;         /* certified bound of the last solve */
+    int capped;           /* stopped by max_computed */
+} solve_state;
 
 struct aqs_linkage {
     aqs_alloc_fn alloc;
@@ -84,8 +126,8 @@ struct aqs_linkage {
     char error[320];
     int finalized;
     int solved;
-    int coeffs_dirty; /* positions changed since the coefficients were computed */
-    int loads_dirty;  /* loads changed since the leaves were computed */
+    int loads_dirty;  /* body loads changed, or positions moved (world-frame loads) */
+    int gravity_dirty; /* gravity changed since the world leaf was computed */
     int lax_inertia;  /* accept inertias violating the triangle inequality */
 
     int32_t nbodies, body_cap;
@@ -108,6 +150,7 @@ struct aqs_linkage {
     double *cforce;   /* 6 njoints */
     double *q_saved;  /* nq: positions before a step, to undo a failed one */
     double *welded_acc; /* scratch for fixed-joint forces */
+    solve_state s;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
 };
 

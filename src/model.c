@@ -106,6 +106,9 @@ void model_free(aqs_linkage *L)
     lk_free(L, m->eff_place);
     lk_free(L, m->parent_joint);
     lk_free(L, m->order);
+    lk_free(L, m->members);
+    lk_free(L, m->member_start);
+    lk_free(L, m->comp_welded);
     memset(m, 0, sizeof *m);
 }
 
@@ -264,6 +267,25 @@ aqs_status model_build(aqs_linkage *L)
         } else {
             m->eff_parent[e] = m->comp_of_body[j->parent];
             pose_compose(&m->body_in_comp[j->parent], &place, &m->eff_place[e]);
+        }
+    }
+    /* Members of each composite, parents first (for the fixed joints' forces). */
+    m->members = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
+    m->member_start = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
+    m->comp_welded = lk_calloc(L, (size_t)m->ncomp + 1, 1);
+    if (!m->members || !m->member_start || !m->comp_welded) {
+        st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
+        goto fail;
+    }
+    for (i = 0; i < nb; i++) m->member_start[m->comp_of_body[i] + 1]++;
+    for (i = 0; i <= m->ncomp; i++) m->member_start[i + 1] += m->member_start[i];
+    {
+        int32_t *cursor = next_sibling; /* nb + 1 >= ncomp + 1 entries, no longer needed */
+        for (i = 0; i <= m->ncomp; i++) cursor[i] = m->member_start[i];
+        for (k = 0; k < nb; k++) {
+            int32_t b = m->order[k], c = m->comp_of_body[b];
+            m->members[cursor[c]++] = b;
+            if (L->joints[m->parent_joint[b]].type == AQS_JOINT_FIXED) m->comp_welded[c] = 1;
         }
     }
     lk_free(L, first_child);

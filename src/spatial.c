@@ -305,3 +305,16 @@ void spatial_xform_congruence(const pose *P, const double *S, double *out)
         for (j = i + 1; j < 6; j++) out[6 * i + j] = out[6 * j + i] = 0.5 * (Y[6 * i + j] + Y[6 * j + i]);
     }
 }
+
+void spatial_force_from_parent(const pose *P, const double f[6], double out[6])
+{
+    /* The same arithmetic as a motion vector with the two halves swapped. */
+    double sw[6] = {f[3], f[4], f[5], f[0], f[1], f[2]}, o[6];
+    spatial_xform_motion(P, sw, o);
+    out[0] = o[3];
+    out[1] = o[4];
+    out[2] = o[5];
+    out[3] = o[0];
+    out[4] = o[1];
+    out[5] = o[2];
+}

@@ -57,3 +57,5 @@ void spatial_xform_force_back(const pose *P, const double f[6], double out[6]);
 void spatial_xform_rows(const pose *P, const double *B, double *out);
 /* out = X S X^T for a symmetric 6x6 S. */
 void spatial_xform_congruence(const pose *P, const double *S, double *out);
+/* out = force vector f (given in the parent frame) in P's frame: [R^T (n - p x f); R^T f]. */
+void spatial_force_from_parent(const pose *P, const double f[6], double out[6]);

@@ -3,8 +3,11 @@
 
 #include <string.h>
 
+#include <stdlib.h>
+
 #include "dca.h"
 #include "dense.h"
+#include "totalacc.h"
 
 void update_leaf_poses(aqs_linkage *L, int32_t n)
 {
@@ -116,16 +119,40 @@ void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *co
     f[2] += n[2];
 }
 
+void update_mark(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    /* The dirty set is top-closed: stop at the first node already in it. */
+    for (; n >= 0 && t->stamp[n] != t->epoch; n = t->nodes[n].parent) {
+        t->stamp[n] = t->epoch;
+        t->dirty[t->ndirty++] = n;
+    }
+}
+
+void update_mark_all(aqs_linkage *L) { L->t.all_dirty = 1; }
+
+/* Refresh a leaf's b and mark its ancestors. */
+static void refresh_leaf(aqs_linkage *L, int32_t leaf)
+{
+    dca_leaf_b(L, leaf);
+    update_mark(L, L->t.nodes[leaf].parent);
+}
+
 void update_loads(aqs_linkage *L)
 {
     model *m = &L->m;
     int32_t i, k;
     if (L->t.nnodes == 0) return;
+    if (L->gravity_dirty) {
+        refresh_leaf(L, L->t.leaf_of_comp[m->ncomp]);
+        L->gravity_dirty = 0;
+    }
+    if (!L->loads_dirty) return;
     for (i = 0; i < m->nloaded_comps; i++) {
         int32_t c = m->loaded_comps[i];
         memset(m->comp_force + 6 * c, 0, 6 * sizeof(double));
         m->comp_loaded[c] = 0;
-        dca_leaf_b(L, L->t.leaf_of_comp[c]);
+        refresh_leaf(L, L->t.leaf_of_comp[c]);
     }
     m->nloaded_comps = 0;
     for (k = 0; k < L->nloaded; k++) {
@@ -141,24 +168,51 @@ void update_loads(aqs_linkage *L)
         update_body_load_in_comp(L, b, &Pc, f);
         for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
     }
-    for (i = 0; i < m->nloaded_comps; i++) dca_leaf_b(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
-    dca_leaf_b(L, L->t.leaf_of_comp[m->ncomp]);
+    for (i = 0; i < m->nloaded_comps; i++) refresh_leaf(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
+    L->loads_dirty = 0;
+}
+
+static int compare_int32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static aqs_status update_node(aqs_linkage *L, int32_t n)
+{
+    const node *nd = &L->t.nodes[n];
+    if (nd->joint < 0) return AQS_OK;
+    if (dca_node_update(L, n) != 0)
+        return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
+                       (int)L->m.eff_joint[nd->joint]);
+    if (L->t.tdata) totalacc_node_update(L, n);
+    return AQS_OK;
 }
 
 aqs_status update_coefficients(aqs_linkage *L)
 {
-    int32_t n;
-    if (!L->coeffs_dirty && !L->loads_dirty) return AQS_OK;
-    update_loads(L);
-    for (n = 0; n < L->t.nnodes; n++) {
-        const node *nd = &L->t.nodes[n];
-        if (nd->joint < 0) continue;
-        if (dca_node_update(L, n) != 0)
-            return lk_fail(L, AQS_ENUMERIC,
-                           "articulated inertia across joint %d is numerically singular",
-                           (int)L->m.eff_joint[nd->joint]);
+    tree *t = &L->t;
+    aqs_status st = AQS_OK;
+    int32_t k;
+    if (t->nnodes == 0) return AQS_OK;
+    if (t->all_dirty) {
+        L->loads_dirty = L->gravity_dirty = 1;
+        update_loads(L); /* marks are superseded by the full pass */
+        for (k = 0; k < t->nnodes && st == AQS_OK; k++) st = update_node(L, k);
+        t->nodes_updated = t->nnodes;
+    } else {
+        update_loads(L);
+        /* Children first: a child's index is below its parent's. */
+        qsort(t->dirty, (size_t)t->ndirty, sizeof(int32_t), compare_int32);
+        for (k = 0; k < t->ndirty && st == AQS_OK; k++) st = update_node(L, t->dirty[k]);
+        t->nodes_updated = t->ndirty;
     }
-    L->coeffs_dirty = 0;
-    L->loads_dirty = 0;
+    if (st != AQS_OK) return st; /* the marks stay: a later update retries */
+    t->all_dirty = 0;
+    t->ndirty = 0;
+    if (++t->epoch == 0) { /* wrapped: clear the stamps once */
+        memset(t->stamp, 0, sizeof(uint32_t) * (size_t)t->nnodes);
+        t->epoch = 1;
+    }
     return AQS_OK;
 }

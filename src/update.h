@@ -25,12 +25,18 @@ void update_all_body_poses_world(const aqs_linkage *L, pose *out);
  * composite's world pose. */
 void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
                               double f[6]);
-/* Re-express every body load in its composite's frame and refresh the
- * leaves whose load changed (and the world leaf, for gravity). */
+/* Mark node n and its ancestors stale (MATH.md §9.1). O(log N), less when
+ * an ancestor is already marked. */
+void update_mark(aqs_linkage *L, int32_t n);
+/* Mark every node stale (positions set in bulk, finalize). */
+void update_mark_all(aqs_linkage *L);
+/* When loads changed (or positions moved, loads_dirty): re-express every
+ * body load in its composite's frame, refresh those leaves (and the world
+ * leaf when gravity changed) and mark their ancestors. O(N_U log N). */
 void update_loads(aqs_linkage *L);
-/* Bring every coefficient up to date with the positions and loads (exact
- * mode: all internal nodes, children first). Returns AQS_OK or AQS_ENUMERIC
- * (message set). */
+/* Recompute the stale nodes, children first: Phi, b and the DCA terms, and
+ * the total-acceleration factors when enabled. Returns AQS_OK or
+ * AQS_ENUMERIC (message set; the stale marks remain). */
 aqs_status update_coefficients(aqs_linkage *L);
 
 #endif

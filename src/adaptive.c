@@ -1,0 +1,276 @@
+/* adaptive.c -- partial back-substitution ordered by a binary max-heap keyed
+ * by each queued node's total acceleration A(node) (MATH.md §6).
+ *
+ * Invariant: every joint that is not computed lies in exactly one queued
+ * node, so sum_{queued} A = sum_{zeroed j} ||qdd_j||^2 =: eps_c^2 and
+ * max_{zeroed} ||qdd_j|| <= sqrt(max_{queued} A) (the heap top). */
+#include "adaptive.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "dca.h"
+#include "heap.h"
+#include "totalacc.h"
+#include "update.h"
+
+aqs_status adaptive_alloc(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    size_t n = (size_t)L->t.nnodes + 1;
+    int32_t i;
+    s->processed = lk_calloc(L, n, sizeof(int32_t));
+    s->reached = lk_calloc(L, (size_t)L->m.ncomp + 2, sizeof(int32_t));
+    s->heap_key = lk_calloc(L, n, sizeof(double));
+    s->heap_item = lk_calloc(L, n, sizeof(int32_t));
+    if (!s->processed || !s->reached || !s->heap_key || !s->heap_item) return AQS_ENOMEM;
+    s->counted = 0;
+    for (i = 0; i < L->m.ne; i++)
+        if (L->joints[L->m.eff_joint[i]].type != AQS_JOINT_FREE) s->counted++;
+    s->valid = 0;
+    s->all = 0;
+    return AQS_OK;
+}
+
+void adaptive_free(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    lk_free(L, s->processed);
+    lk_free(L, s->reached);
+    lk_free(L, s->heap_key);
+    lk_free(L, s->heap_item);
+    s->processed = s->reached = s->heap_item = NULL;
+    s->heap_key = NULL;
+}
+
+/* Uncomputed joints read as acceleration 0 and constraint force NaN. Undo
+ * the last solve's outputs: O(N_E) after an adaptive solve. */
+static void reset_outputs(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    const model *m = &L->m;
+    int32_t i, k;
+    if (s->all || !s->valid) {
+        for (i = 0; i < L->nv; i++) L->qdd[i] = 0.0;
+        for (i = 0; i < 6 * L->njoints; i++) L->cforce[i] = NAN;
+    } else {
+        for (i = 0; i < s->nprocessed; i++) {
+            int32_t j = m->eff_joint[L->t.nodes[s->processed[i]].joint];
+            const joint_def *jd = &L->joints[j];
+            for (k = 0; k < joint_nv(jd->type); k++) L->qdd[jd->voff + k] = 0.0;
+            for (k = 0; k < 6; k++) L->cforce[6 * j + k] = NAN;
+        }
+        for (i = 0; i < s->nreached; i++) {
+            int32_t c = s->reached[i];
+            for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
+                int32_t pj = m->parent_joint[m->members[k]], r;
+                if (L->joints[pj].type == AQS_JOINT_FIXED)
+                    for (r = 0; r < 6; r++) L->cforce[6 * pj + r] = NAN;
+            }
+        }
+    }
+    s->nprocessed = 0;
+    s->nreached = 0;
+    s->computed = 0;
+    s->all = 0;
+}
+
+static double norm_qdd(const aqs_linkage *L, int32_t n)
+{
+    const joint_def *jd = &L->joints[L->m.eff_joint[L->t.nodes[n].joint]];
+    double s = 0.0;
+    int k;
+    for (k = 0; k < joint_nv(jd->type); k++) s += L->qdd[jd->voff + k] * L->qdd[jd->voff + k];
+    return sqrt(s);
+}
+
+/* Back-substitute node n and hand its children their forces; leaves with
+ * welded bodies get their fixed joints' forces. Children that are internal
+ * are returned through kids (count returned). */
+static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
+{
+    solve_state *s = &L->s;
+    const node *nd = &L->t.nodes[n];
+    int32_t child[2] = {nd->a, nd->b}, i, nk = 0;
+    dca_node_backsub(L, n);
+    s->processed[s->nprocessed++] = n;
+    if (L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE) {
+        double q = norm_qdd(L, n);
+        s->computed++;
+        if (q > s->lower) s->lower = q;
+    }
+    for (i = 0; i < 2; i++) {
+        const node *c = &L->t.nodes[child[i]];
+        if (c->joint >= 0) kids[nk++] = child[i];
+        else if (L->m.comp_welded[c->comp]) {
+            dca_welded_forces_comp(L, c->comp);
+            s->reached[s->nreached++] = c->comp;
+        }
+    }
+    return nk;
+}
+
+static void push(aqs_linkage *L, heap *h, int32_t n)
+{
+    solve_state *s = &L->s;
+    double a = totalacc_eval(L, n);
+    const node *nd = &L->t.nodes[n];
+    heap_push(h, a, n);
+    s->sum += a;
+    if (nd->ncount > 0) {
+        double low = sqrt(a / nd->ncount);
+        if (low > s->lower) s->lower = low;
+    }
+}
+
+/* The certified bound for the state of the queue (sum: eps_c^2; top: the
+ * largest queued A). */
+static double bound_of(const aqs_linkage *L, double sum, double top)
+{
+    const solve_state *s = &L->s;
+    switch (s->metric) {
+    case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
+    case AQS_METRIC_REL_LINKAGE: return s->a_root > 0.0 ? sqrt(sum) / sqrt(s->a_root) : 0.0;
+    case AQS_METRIC_ABS_JOINT: return sqrt(top);
+    default: return top > 0.0 ? sqrt(top) / s->lower : 0.0;
+    }
+}
+
+/* Neumaier-compensated sum of the queued values. */
+static double resum(const heap *h)
+{
+    double sum = 0.0, c = 0.0;
+    int32_t i;
+    for (i = 0; i < h->size; i++) {
+        double v = h->key[i], t = sum + v;
+        c += fabs(sum) >= fabs(v) ? (sum - t) + v : (v - t) + sum;
+        sum = t;
+    }
+    return sum + c;
+}
+
+static void run(aqs_linkage *L, heap *h, double eps)
+{
+    solve_state *s = &L->s;
+    for (;;) {
+        double top = heap_top(h), a;
+        int32_t n, kids[2], nk, i;
+        if (s->sum < 0.0) s->sum = 0.0; /* rounding of the running sum (§6.4) */
+        s->bound = bound_of(L, s->sum, top);
+        if (h->size == 0) {
+            s->bound = 0.0;
+            break;
+        }
+        if (s->bound <= eps) {
+            /* Accept only after re-summing the queue (the running sum drifts). */
+            s->sum = resum(h);
+            s->bound = bound_of(L, s->sum, top);
+            if (s->bound <= eps) break;
+        }
+        if (s->max_computed > 0 && s->computed >= s->max_computed) {
+            s->capped = 1;
+            s->sum = resum(h);
+            s->bound = bound_of(L, s->sum, top);
+            break;
+        }
+        heap_pop(h, &a, &n);
+        s->sum -= a;
+        nk = process(L, n, kids);
+        for (i = 0; i < nk; i++) push(L, h, kids[i]);
+    }
+    s->heap_size = h->size;
+}
+
+void adaptive_solve(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    tree *t = &L->t;
+    int32_t n, kids[2], i;
+    reset_outputs(L);
+    s->lower = 0.0;
+    s->capped = 0;
+    s->sum = 0.0;
+    s->valid = 0;
+    if (t->nnodes == 0) { /* nothing moves */
+        s->all = 1;
+        s->bound = 0.0;
+        s->a_root = 0.0;
+        if (L->m.comp_welded[L->m.ncomp]) dca_welded_forces_comp(L, L->m.ncomp);
+        return;
+    }
+    if (s->eps == 0.0 && s->max_computed == 0) {
+        /* Exact: every node, parents before children (descending index). */
+        for (n = t->nnodes - 1; n >= 0; n--)
+            if (t->nodes[n].joint >= 0) process(L, n, kids);
+        s->all = 1;
+        s->bound = 0.0;
+        s->a_root = 0.0;
+        s->valid = 1;
+        return;
+    }
+    {
+        heap h;
+        int32_t stack_top = 0;
+        heap_init(&h, s->heap_key, s->heap_item, t->nnodes);
+        s->a_root = totalacc_eval(L, t->root);
+        /* Nodes on the way to a free joint are always computed: the floating
+         * base's acceleration is not part of the approximation (§3.7). They
+         * are processed first, parents before children, using the heap's
+         * item array from its far end as a stack. */
+        if (t->nodes[t->root].forced) {
+            int32_t *st = s->heap_item + t->nnodes; /* grows downwards */
+            st[-(++stack_top)] = t->root;
+            while (stack_top > 0) {
+                int32_t nk;
+                n = st[-(stack_top--)];
+                nk = process(L, n, kids);
+                for (i = 0; i < nk; i++) {
+                    if (t->nodes[kids[i]].forced) st[-(++stack_top)] = kids[i];
+                    else push(L, &h, kids[i]);
+                }
+            }
+        } else {
+            push(L, &h, t->root);
+        }
+        run(L, &h, s->eps);
+    }
+    s->valid = 1;
+}
+
+void adaptive_refine(aqs_linkage *L, double eps)
+{
+    solve_state *s = &L->s;
+    heap h;
+    heap_init(&h, s->heap_key, s->heap_item, L->t.nnodes);
+    h.size = s->heap_size;
+    s->capped = 0;
+    run(L, &h, eps);
+}
+
+void adaptive_integrate(aqs_linkage *L, double h)
+{
+    solve_state *s = &L->s;
+    tree *t = &L->t;
+    int32_t i, n;
+    if (s->all) {
+        for (i = 0; i < L->m.ne; i++) {
+            const joint_def *jd = &L->joints[L->m.eff_joint[i]];
+            joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
+        }
+        update_all_poses(L);
+        update_mark_all(L);
+    } else {
+        for (i = 0; i < s->nprocessed; i++) {
+            const joint_def *jd = &L->joints[L->m.eff_joint[t->nodes[s->processed[i]].joint]];
+            joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
+        }
+        /* Processed nodes were taken parents first: refresh children first. */
+        for (i = s->nprocessed - 1; i >= 0; i--) {
+            n = s->processed[i];
+            update_node_poses(L, n);
+            update_mark(L, n);
+        }
+    }
+    L->loads_dirty = 1; /* world-frame loads are re-expressed (§9.1) */
+    s->valid = 0;
+}

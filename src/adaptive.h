@@ -1,0 +1,20 @@
+/* adaptive.h -- the heap-ordered partial back-substitution with certified
+ * error bounds (MATH.md §6), and the exact full back-substitution. */
+#ifndef AQS_ADAPTIVE_H
+#define AQS_ADAPTIVE_H
+
+#include "linkage.h"
+
+/* The per-solve arrays (heap, processed list), sized at finalize. */
+aqs_status adaptive_alloc(aqs_linkage *L);
+void adaptive_free(aqs_linkage *L);
+/* Back-substitute with the current tolerance (exact when eps = 0 and no
+ * cap), after the coefficients are up to date. Sets L->s. */
+void adaptive_solve(aqs_linkage *L);
+/* Continue the last adaptive solve down to a smaller eps. */
+void adaptive_refine(aqs_linkage *L, double eps);
+/* q <- q (+) h qdd for the computed joints; refresh the moved nodes' frames
+ * and mark them stale. */
+void adaptive_integrate(aqs_linkage *L, double h);
+
+#endif
