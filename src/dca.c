@@ -100,6 +100,27 @@ static int32_t child_index(int32_t c, int32_t k)
     return c < k ? c : c + 1;
 }
 
+/* T = Phi^A_kk + Phi^B_kk is positive definite in exact arithmetic, but at
+ * extreme mass ratios rounding can leave it indefinite by a hair (MATH.md
+ * §3.8: plain Cholesky failed on 1e12 ratios). Retry with a diagonal shift
+ * at the rounding level of T (1e-13, then 1e-11, 1e-9 of its largest
+ * diagonal entry): the perturbation is below what the data resolve, while
+ * an LU inverse of an indefinite T yields a negative S^T V S and garbage. */
+static int guarded_cholesky(const double *T, double *C)
+{
+    double shifted[36], scale = 0.0, shift;
+    int i, k;
+    if (dense_cholesky6(T, C) == 0) return 0;
+    for (i = 0; i < 6; i++)
+        if (fabs(T[7 * i]) > scale) scale = fabs(T[7 * i]);
+    for (k = 0, shift = 1e-13 * scale; k < 3; k++, shift *= 100.0) {
+        memcpy(shifted, T, sizeof shifted);
+        for (i = 0; i < 6; i++) shifted[7 * i] += shift;
+        if (dense_cholesky6(shifted, C) == 0) return 0;
+    }
+    return -1;
+}
+
 int dca_node_update(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
@@ -115,7 +136,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
     int32_t nAo = nA - 1, i, ci, cj;
-    double T[36], V[36], VS[36], D[36], Dinv[36], beta[6], bk[6], tmp[6];
+    double T[36], V[36], VS[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Cf[36], Ws[36];
+    int have_factor;
 
     joint_child_pose(jd, q, J); /* X maps k's joint frame to its child frame */
     joint_subspace(jd, q, S);
@@ -128,7 +150,11 @@ int dca_node_update(aqs_linkage *L, int32_t n)
         for (i = 0; i < 36; i++) T[i] += Bkk[i];
     }
     dense_symmetrize(T, 6);
-    if (dense_spd_inverse(T, V, 6) != 0) return -1;
+    /* Cholesky T = C C^T; then D = S^T V S = ||C^{-1} S||^2 is formed as a
+     * Gram matrix and cannot lose definiteness to rounding. */
+    if (guarded_cholesky(T, Cf) != 0) return -1;
+    dense_cholesky6_inverse(Cf, V);
+    have_factor = 1;
 
     /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
     for (ci = 0; ci < nAo; ci++) spatial_xform_rows(J, cblk(phiA, nA, child_index(ci, ka), ka), M + 36 * ci);
@@ -153,11 +179,15 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     } else if (d == 1) {
         /* One dof (revolute, prismatic): D is a scalar and W a rank-1 update. */
         double Dv = 0.0, sb = 0.0, r;
-        dense_matvec6(V, S, VS);
-        for (i = 0; i < 6; i++) {
-            Dv += S[i] * VS[i];
-            sb += VS[i] * beta[i];
+        if (have_factor) {
+            dense_cholesky6_lower_solve(Cf, S, Ws, 1); /* w = C^{-1} s, D = w.w */
+            dense_cholesky6_upper_solve(Cf, Ws, VS, 1);
+            for (i = 0; i < 6; i++) Dv += Ws[i] * Ws[i];
+        } else {
+            dense_matvec6(V, S, VS);
+            for (i = 0; i < 6; i++) Dv += S[i] * VS[i];
         }
+        for (i = 0; i < 6; i++) sb += VS[i] * beta[i];
         if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
         for (i = 0; i < 6; i++) U[i] = VS[i] / Dv;
         for (i = 0; i < 6; i++) {
@@ -170,8 +200,14 @@ int dca_node_update(aqs_linkage *L, int32_t n)
         dense_matvec6(V, beta, gamma);
         for (i = 0; i < 6; i++) gamma[i] += VS[i] * r;
     } else {
-        dense_mul(V, S, VS, 6, 6, d);       /* V S (6 x d) */
-        dense_mul_tn(S, VS, D, d, 6, d);    /* D = S^T V S */
+        if (have_factor) {
+            dense_cholesky6_lower_solve(Cf, S, Ws, d); /* C^{-1} S */
+            dense_cholesky6_upper_solve(Cf, Ws, VS, d);
+            dense_mul_tn(Ws, Ws, D, d, 6, d);          /* D = (C^{-1} S)^T (C^{-1} S) */
+        } else {
+            dense_mul(V, S, VS, 6, 6, d);
+            dense_mul_tn(S, VS, D, d, 6, d);
+        }
         dense_symmetrize(D, d);
         if (dense_spd_inverse(D, Dinv, d) != 0) return -1;
         dense_mul_nt(Dinv, VS, U, d, d, 6); /* U = D^{-1} (V S)^T */

@@ -160,40 +160,76 @@ static int inverse_lu(const double *A, double *out, int n)
     return 0;
 }
 
-/* The 6x6 case with constant bounds, so that the compiler unrolls it: it
- * runs once per assembly-tree node and step. */
-static int inverse_cholesky6(const double *A, double *out)
+int dense_cholesky6(const double *A, double *C)
 {
-    double L[36], Li[36], dinv[6];
     int i, j, k;
+    for (i = 0; i < 36; i++) C[i] = 0.0;
     for (j = 0; j < 6; j++) {
-        double d = A[7 * j];
-        for (k = 0; k < j; k++) d -= L[6 * j + k] * L[6 * j + k];
-        if (!(d > 0.0)) return -1;
+        double d = A[7 * j], inv;
+        for (k = 0; k < j; k++) d -= C[6 * j + k] * C[6 * j + k];
+        if (!(d > 0.0) || !isfinite(d)) return -1;
         d = sqrt(d);
-        L[7 * j] = d;
-        dinv[j] = 1.0 / d;
+        C[7 * j] = d;
+        inv = 1.0 / d;
         for (i = j + 1; i < 6; i++) {
             double s = A[6 * i + j];
-            for (k = 0; k < j; k++) s -= L[6 * i + k] * L[6 * j + k];
-            L[6 * i + j] = s * dinv[j];
+            for (k = 0; k < j; k++) s -= C[6 * i + k] * C[6 * j + k];
+            C[6 * i + j] = s * inv;
         }
     }
+    return 0;
+}
+
+void dense_cholesky6_inverse(const double *C, double *V)
+{
+    double Ci[36];
+    int i, j, k;
+    for (i = 0; i < 36; i++) Ci[i] = 0.0;
     for (j = 0; j < 6; j++) {
-        Li[7 * j] = dinv[j];
+        Ci[7 * j] = 1.0 / C[7 * j];
         for (i = j + 1; i < 6; i++) {
             double s = 0.0;
-            for (k = j; k < i; k++) s -= L[6 * i + k] * Li[6 * k + j];
-            Li[6 * i + j] = s * dinv[i];
+            for (k = j; k < i; k++) s -= C[6 * i + k] * Ci[6 * k + j];
+            Ci[6 * i + j] = s / C[7 * i];
         }
     }
     for (i = 0; i < 6; i++)
         for (j = 0; j <= i; j++) {
             double s = 0.0;
-            for (k = i; k < 6; k++) s += Li[6 * k + i] * Li[6 * k + j];
-            out[6 * i + j] = s;
-            out[6 * j + i] = s;
+            for (k = i; k < 6; k++) s += Ci[6 * k + i] * Ci[6 * k + j];
+            V[6 * i + j] = s;
+            V[6 * j + i] = s;
         }
+}
+
+void dense_cholesky6_lower_solve(const double *C, const double *b, double *w, int n)
+{
+    int i, k, c;
+    for (c = 0; c < n; c++)
+        for (i = 0; i < 6; i++) {
+            double s = b[n * i + c];
+            for (k = 0; k < i; k++) s -= C[6 * i + k] * w[n * k + c];
+            w[n * i + c] = s / C[7 * i];
+        }
+}
+
+void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, int n)
+{
+    int i, k, c;
+    for (c = 0; c < n; c++)
+        for (i = 5; i >= 0; i--) {
+            double s = w[n * i + c];
+            for (k = i + 1; k < 6; k++) s -= C[6 * k + i] * v[n * k + c];
+            v[n * i + c] = s / C[7 * i];
+        }
+}
+
+/* The 6x6 case through the factor above. */
+static int inverse_cholesky6(const double *A, double *out)
+{
+    double C[36];
+    if (dense_cholesky6(A, C) != 0) return -1;
+    dense_cholesky6_inverse(C, out);
     return 0;
 }
 

@@ -71,6 +71,17 @@ static inline void dense_tmatvec6(const double *A, const double *x, double *y)
     for (i = 0; i < 6; i++) y[i] = s[i];
 }
 
+/* Cholesky factor of a 6x6 SPD matrix: A = C C^T, C lower (row-major, the
+ * upper part zeroed). Returns 0, or -1 at a non-positive or non-finite pivot. */
+int dense_cholesky6(const double *A, double *C);
+/* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6). */
+void dense_cholesky6_inverse(const double *C, double *V);
+/* Solve C w = b (forward) for n right-hand sides stored as the columns of the
+ * 6 x n row-major b; w has the same layout. */
+void dense_cholesky6_lower_solve(const double *C, const double *b, double *w, int n);
+/* Solve C^T v = w (backward), same layout. */
+void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, int n);
+
 /* Householder QR of the m x n row-major matrix A, in place: on return the
  * first min(m, n) rows hold the upper-trapezoidal R (entries below the
  * diagonal zeroed); the other rows are garbage. Returns min(m, n). */
