@@ -46,7 +46,8 @@ C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.
 CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
-BENCH_SRCS := $(sort $(wildcard bench/*.c))
+BENCH_MAINS := bench/demo.c bench/exact_bench.c bench/adaptive_bench.c bench/aqs_bench.c
+BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
         deps demo bench install clean
@@ -124,17 +125,18 @@ install: lib
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(VERSION)|g' aqs.pc.in \
 	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/aqs.pc
 
-$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(filter-out bench/aqs_bench.c bench/demo.c,$(BENCH_SRCS)) $(STLIB)
+$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
 	@mkdir -p $(dir $@)
-	$(CC) -std=c99 -O2 -g $(WARN) -Iinclude -Ibench -o $@ $< \
-	    $(filter-out bench/aqs_bench.c bench/demo.c bench/exact_bench.c,$(BENCH_SRCS)) $(STLIB) $(LDLIBS)
+	@echo "  CC      $<"
+	@$(CC) -std=c99 -O2 -g $(WARN) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
 
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo
 
-bench: $(BUILD)/bench/exact_bench
+bench: $(BUILD)/bench/exact_bench $(if $(wildcard bench/adaptive_bench.c),$(BUILD)/bench/adaptive_bench)
 	@mkdir -p docs/bench
 	$(BUILD)/bench/exact_bench
+	$(if $(wildcard bench/adaptive_bench.c),$(BUILD)/bench/adaptive_bench)
 
 clean:
 	rm -rf build
