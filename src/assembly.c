@@ -167,10 +167,60 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->node_of_eff);
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);
+    lk_free(L, t->mscratch);
     lk_free(L, t->stamp);
     lk_free(L, t->dirty);
     memset(t, 0, sizeof *t);
     t->root = -1;
+}
+
+/* Renumber the nodes in depth-first post-order (A's subtree, B's subtree,
+ * then the node): children still come before parents, and each subtree's
+ * nodes -- hence, after layout(), its pooled memory -- are contiguous, so
+ * the children-first update and the back-substitution stream through
+ * memory instead of jumping between contraction rounds. */
+static int renumber_postorder(aqs_linkage *L)
+{
+    tree *t = &L->t;
+    int32_t n = t->nnodes, top = 0, next = 0, i;
+    int32_t *stack = lk_alloc(L, sizeof(int32_t) * (size_t)(n + 1));
+    int32_t *newid = lk_alloc(L, sizeof(int32_t) * (size_t)(n + 1));
+    unsigned char *expanded = lk_calloc(L, (size_t)n + 1, 1);
+    node *copy = lk_alloc(L, sizeof(node) * (size_t)(n + 1));
+    if (!stack || !newid || !expanded || !copy) {
+        lk_free(L, stack);
+        lk_free(L, newid);
+        lk_free(L, expanded);
+        lk_free(L, copy);
+        return -1;
+    }
+    stack[top++] = t->root;
+    while (top > 0) {
+        int32_t v = stack[top - 1];
+        if (t->nodes[v].joint >= 0 && !expanded[v]) {
+            expanded[v] = 1;
+            stack[top++] = t->nodes[v].b; /* popped after A's subtree */
+            stack[top++] = t->nodes[v].a;
+        } else {
+            top--;
+            newid[v] = next++;
+        }
+    }
+    memcpy(copy, t->nodes, sizeof(node) * (size_t)n);
+    for (i = 0; i < n; i++) {
+        node nd = copy[i];
+        if (nd.a >= 0) nd.a = newid[nd.a];
+        if (nd.b >= 0) nd.b = newid[nd.b];
+        if (nd.parent >= 0) nd.parent = newid[nd.parent];
+        t->nodes[newid[i]] = nd;
+    }
+    for (i = 0; i <= L->m.ncomp; i++) t->leaf_of_comp[i] = newid[t->leaf_of_comp[i]];
+    t->root = newid[t->root];
+    lk_free(L, stack);
+    lk_free(L, newid);
+    lk_free(L, expanded);
+    lk_free(L, copy);
+    return 0;
 }
 
 /* Offsets of every node's pooled arrays. */
@@ -187,10 +237,10 @@ static void layout(tree *t)
         n->bv = pool_take(&t->ndata, 6 * h);
         n->xf = pool_take(&t->ndata, 6 * h);
         if (n->joint >= 0) {
-            n->M = pool_take(&t->ndata, 36 * h);
             n->J = pool_take(&t->nposes, 1);
             n->W = pool_take(&t->ndata, 36);
             n->U = pool_take(&t->ndata, 6 * n->d);
+            n->VS = pool_take(&t->ndata, 6 * n->d);
             n->rho = pool_take(&t->ndata, n->d);
             n->gamma = pool_take(&t->ndata, 6);
             n->S = pool_take(&t->ndata, 6 * n->d);
@@ -251,6 +301,7 @@ aqs_status assembly_build(aqs_linkage *L)
     t->handles = B.hv;
     t->nhandles = B.nhv;
     B.hv = NULL;
+    if (t->nnodes > 0 && renumber_postorder(L) != 0) goto fail;
     t->height = 0;
     t->max_handles = 0;
     for (i = 0; i < t->nnodes; i++) {
@@ -270,12 +321,13 @@ aqs_status assembly_build(aqs_linkage *L)
     layout(t);
     t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
-    t->scratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 2), sizeof(double));
+    t->scratch = lk_calloc(L, 84 * (size_t)(t->max_handles + 2), sizeof(double));
+    t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
     t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
     t->all_dirty = 1;
-    if (!t->poses || !t->data || !t->scratch || !t->stamp || !t->dirty) goto fail;
+    if (!t->poses || !t->data || !t->scratch || !t->mscratch || !t->stamp || !t->dirty) goto fail;
     lk_free(L, B.uf);
     lk_free(L, B.uf_node);
     lk_free(L, cursor);

@@ -93,6 +93,17 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
 }
 
 
+/* y = C^{-1} m for the lower-triangular 6x6 factor C (forward substitution). */
+static void lower_solve_row6(const double *Cf, const double *m, double *y)
+{
+    int i, k;
+    for (i = 0; i < 6; i++) {
+        double v = m[i];
+        for (k = 0; k < i; k++) v -= Cf[6 * i + k] * y[k];
+        y[i] = v / Cf[7 * i];
+    }
+}
+
 /* Index among a child's handles of the outer handle at position c of the
  * merged list [A-outer; B-outer]. */
 static int32_t child_index(int32_t c, int32_t k)
@@ -128,33 +139,29 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    pose *J = (t->poses + C->J);
-    double *W = t->data + C->W, *U = t->data + C->U;
+    pose *J = t->poses + C->J;
+    double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
     double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
-    double *M = t->data + C->M, *phi = t->data + C->phi, *bC = t->data + C->bv;
+    double *M = t->mscratch, *phi = t->data + C->phi, *bC = t->data + C->bv;
     const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
-    int32_t nAo = nA - 1, i, ci, cj;
-    double T[36], V[36], VS[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Cf[36], Ws[36];
-    int have_factor;
+    int32_t nAo = nA - 1, i, j, ci, cj;
+    double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
 
     joint_child_pose(jd, q, J); /* X maps k's joint frame to its child frame */
     joint_subspace(jd, q, S);
 
-    /* V = (X Phi^A_kk X^T + Phi^B_kk)^{-1}: A's k blocks into the child frame
-     * of k (§3.6). */
+    /* T = X Phi^A_kk X^T + Phi^B_kk, with A's k blocks moved into the child
+     * frame of k (§3.6); V = T^{-1} is used only through T's Cholesky
+     * factor C: V = C^{-T} C^{-1}. */
     spatial_xform_congruence(J, cblk(phiA, nA, ka, ka), T);
     {
         const double *Bkk = cblk(phiB, nB, kb, kb);
         for (i = 0; i < 36; i++) T[i] += Bkk[i];
     }
     dense_symmetrize(T, 6);
-    /* Cholesky T = C C^T; then D = S^T V S = ||C^{-1} S||^2 is formed as a
-     * Gram matrix and cannot lose definiteness to rounding. */
     if (guarded_cholesky(T, Cf) != 0) return -1;
-    dense_cholesky6_inverse(Cf, V);
-    have_factor = 1;
 
     /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
     for (ci = 0; ci < nAo; ci++) spatial_xform_rows(J, cblk(phiA, nA, child_index(ci, ka), ka), M + 36 * ci);
@@ -165,10 +172,11 @@ int dca_node_update(aqs_linkage *L, int32_t n)
 
     spatial_xform_motion(J, bA + 6 * ka, bk); /* b^A_k in the child frame */
     for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * kb + i];
+    dense_cholesky6_lower_solve(Cf, beta, tmp, 1);
+    dense_cholesky6_upper_solve(Cf, tmp, Vb, 1); /* V beta */
 
     if (d == 6) {
-        /* Free joint: S = I, so U = I, W = 0, gamma = Q, rho = V^{-1} Q - beta. */
-        memset(W, 0, 36 * sizeof(double));
+        /* Free joint: S = I, so U = I, W = 0, gamma = Q, rho = T Q - beta. */
         memset(U, 0, 36 * sizeof(double));
         for (i = 0; i < 6; i++) U[7 * i] = 1.0;
         dense_matvec6(T, Q, rho);
@@ -176,67 +184,81 @@ int dca_node_update(aqs_linkage *L, int32_t n)
             rho[i] -= beta[i];
             gamma[i] = Q[i];
         }
-    } else if (d == 1) {
-        /* One dof (revolute, prismatic): D is a scalar and W a rank-1 update. */
-        double Dv = 0.0, sb = 0.0, r;
-        if (have_factor) {
-            dense_cholesky6_lower_solve(Cf, S, Ws, 1); /* w = C^{-1} s, D = w.w */
-            dense_cholesky6_upper_solve(Cf, Ws, VS, 1);
-            for (i = 0; i < 6; i++) Dv += Ws[i] * Ws[i];
-        } else {
-            dense_matvec6(V, S, VS);
-            for (i = 0; i < 6; i++) Dv += S[i] * VS[i];
-        }
-        for (i = 0; i < 6; i++) sb += VS[i] * beta[i];
-        if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
-        for (i = 0; i < 6; i++) U[i] = VS[i] / Dv;
-        for (i = 0; i < 6; i++) {
-            int j;
-            for (j = i; j < 6; j++) W[6 * i + j] = W[6 * j + i] = V[6 * i + j] - VS[i] * U[j];
-        }
-        r = (Q[0] - sb) / Dv;
-        rho[0] = r;
-        /* gamma = W beta + U^T Q = V beta - V S (S^T V beta) / D + U Q = V beta + VS r */
-        dense_matvec6(V, beta, gamma);
-        for (i = 0; i < 6; i++) gamma[i] += VS[i] * r;
     } else {
-        if (have_factor) {
-            dense_cholesky6_lower_solve(Cf, S, Ws, d); /* C^{-1} S */
-            dense_cholesky6_upper_solve(Cf, Ws, VS, d);
-            dense_mul_tn(Ws, Ws, D, d, 6, d);          /* D = (C^{-1} S)^T (C^{-1} S) */
+        /* C^{-1} S, V S = C^{-T} C^{-1} S, and D = S^T V S formed as the Gram
+         * matrix of C^{-1} S: it cannot lose definiteness to rounding. */
+        dense_cholesky6_lower_solve(Cf, S, Ws, d);
+        dense_cholesky6_upper_solve(Cf, Ws, VS, d);
+        if (d == 1) {
+            double Dv = 0.0, sb = 0.0;
+            for (i = 0; i < 6; i++) Dv += Ws[i] * Ws[i];
+            if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
+            Dinv[0] = 1.0 / Dv;
+            for (i = 0; i < 6; i++) {
+                U[i] = VS[i] * Dinv[0];
+                sb += VS[i] * beta[i];
+            }
+            rho[0] = (Q[0] - sb) * Dinv[0];
+            for (i = 0; i < 6; i++) gamma[i] = Vb[i] + VS[i] * rho[0];
         } else {
-            dense_mul(V, S, VS, 6, 6, d);
-            dense_mul_tn(S, VS, D, d, 6, d);
+            dense_mul_tn(Ws, Ws, D, d, 6, d);
+            dense_symmetrize(D, d);
+            if (dense_spd_inverse(D, Dinv, d) != 0) return -1;
+            dense_mul_nt(Dinv, VS, U, d, d, 6); /* U = D^{-1} (V S)^T */
+            dense_tmatvec(VS, beta, tmp, 6, d); /* rho = D^{-1} (Q - S^T V beta) */
+            for (i = 0; i < d; i++) tmp[i] = Q[i] - tmp[i];
+            dense_matvec(Dinv, tmp, rho, d, d);
+            /* gamma = W beta + U^T Q = V beta + V S rho, since W = V - V S U */
+            dense_matvec(VS, rho, gamma, 6, d);
+            for (i = 0; i < 6; i++) gamma[i] += Vb[i];
         }
-        dense_symmetrize(D, d);
-        if (dense_spd_inverse(D, Dinv, d) != 0) return -1;
-        dense_mul_nt(Dinv, VS, U, d, d, 6); /* U = D^{-1} (V S)^T */
-        dense_mul(VS, U, T, 6, d, 6);       /* W = V - V S U */
-        for (i = 0; i < 36; i++) W[i] = V[i] - T[i];
-        dense_symmetrize(W, 6);
-        dense_tmatvec(VS, beta, tmp, 6, d); /* rho = D^{-1} (Q - S^T V beta) */
-        for (i = 0; i < d; i++) tmp[i] = Q[i] - tmp[i];
-        dense_matvec(Dinv, tmp, rho, d, d);
-        dense_matvec6(W, beta, gamma);      /* gamma = W beta + U^T Q */
-        dense_tmatvec(U, Q, tmp, d, 6);
-        for (i = 0; i < 6; i++) gamma[i] += tmp[i];
     }
 
-    /* Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T; b_C = [b^A_o; b^B_o] - M gamma. */
+    /* Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T with
+     * M W M^T = (M C^{-T})(M C^{-T})^T - (M V S) D^{-1} (M V S)^T;
+     * b_C = [b^A_o; b^B_o] - M gamma. A free joint has W = 0. */
     {
-        double *MW = t->scratch;
-        for (ci = 0; ci < nh; ci++) dense_mul66(M + 36 * ci, W, MW + 36 * ci);
+        double *Y = t->scratch, *Z = t->scratch + 36 * nh, *ZD = Z + 6 * nh * 6;
+        if (d < 6) {
+            for (ci = 0; ci < 6 * nh; ci++) lower_solve_row6(Cf, M + 6 * ci, Y + 6 * ci);
+            if (d == 1) {
+                for (ci = 0; ci < 6 * nh; ci++) {
+                    double z = 0.0;
+                    for (j = 0; j < 6; j++) z += M[6 * ci + j] * VS[j];
+                    Z[ci] = z;
+                    ZD[ci] = z * Dinv[0];
+                }
+            } else {
+                dense_mul(M, VS, Z, 6 * nh, 6, d);   /* Z = M V S */
+                dense_mul(Z, Dinv, ZD, 6 * nh, d, d); /* Z D^{-1} */
+            }
+        }
         for (ci = 0; ci < nh; ci++)
             for (cj = ci; cj < nh; cj++) {
                 double *out = blk(phi, nh, ci, cj);
-                dense_mul66_nt(MW + 36 * ci, M + 36 * cj, out);
-                if ((ci < nAo) == (cj < nAo)) {
-                    const double *base =
-                        ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
-                                 : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
-                    for (i = 0; i < 36; i++) out[i] = base[i] - out[i];
+                int same = (ci < nAo) == (cj < nAo);
+                const double *base =
+                    !same ? NULL
+                    : ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
+                               : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
+                if (d == 1) {
+                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj;
+                    int r, c;
+                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
+                    for (r = 0; r < 6; r++)
+                        for (c = 0; c < 6; c++)
+                            out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + zd[r] * z[c];
+                } else if (d < 6) {
+                    int r, c, k;
+                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
+                    for (r = 0; r < 6; r++)
+                        for (c = 0; c < 6; c++) {
+                            double sum = 0.0;
+                            for (k = 0; k < d; k++) sum += ZD[(6 * ci + r) * d + k] * Z[(6 * cj + c) * d + k];
+                            out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + sum;
+                        }
                 } else {
-                    for (i = 0; i < 36; i++) out[i] = -out[i];
+                    for (i = 0; i < 36; i++) out[i] = base ? base[i] : 0.0;
                 }
             }
         symmetrize_blocks(phi, nh);
@@ -249,14 +271,34 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     return 0;
 }
 
+void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
+{
+    const tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
+    double tmp[6], uh[6];
+    int i;
+    if (C->d == 6) {
+        for (i = 0; i < 6; i++) out[i] = 0.0;
+        return;
+    }
+    /* W h = V h - V S (U h) */
+    dense_cholesky6_lower_solve(Cf, h, tmp, 1);
+    dense_cholesky6_upper_solve(Cf, tmp, out, 1);
+    dense_matvec(U, h, uh, C->d, 6);
+    dense_matvec(VS, uh, tmp, 6, C->d);
+    for (i = 0; i < 6; i++) out[i] -= tmp[i];
+}
+
 void dca_node_backsub(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *x = t->data + C->xf, *M = t->data + C->M;
-    const double *W = t->data + C->W, *U = t->data + C->U;
+    const double *x = t->data + C->xf;
+    const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
+    const double *U = t->data + C->U;
     const pose *J = (t->poses + C->J);
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *xA = t->data + A->xf, *xB = t->data + B->xf;
@@ -264,15 +306,24 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     int32_t nA = A->nh, nB = B->nh, i, ci, d = C->d;
     double h[6], tmp[6];
 
-    /* h = Phi^A_ko x_A - Phi^B_ko x_B = M^T x (eq. 4, 5) */
-    for (i = 0; i < 6; i++) h[i] = 0.0;
-    for (ci = 0; ci < C->nh; ci++) {
-        dense_tmatvec6(M + 36 * ci, x + 6 * ci, tmp);
-        for (i = 0; i < 6; i++) h[i] += tmp[i];
+    /* h = Phi^A_ko x_A - Phi^B_ko x_B (eq. 4, 5), from the children's blocks:
+     * = X sum_i (Phi^A_{i,k})^T x_i - sum_j (Phi^B_{j,k})^T x_j. */
+    {
+        double ha[6] = {0, 0, 0, 0, 0, 0};
+        int32_t nAo = nA - 1;
+        for (ci = 0; ci < nAo; ci++) {
+            dense_tmatvec6(cblk(phiA, nA, child_index(ci, C->ka), C->ka), x + 6 * ci, tmp);
+            for (i = 0; i < 6; i++) ha[i] += tmp[i];
+        }
+        spatial_xform_motion(J, ha, h);
+        for (ci = nAo; ci < C->nh; ci++) {
+            dense_tmatvec6(cblk(phiB, nB, child_index(ci - nAo, C->kb), C->kb), x + 6 * ci, tmp);
+            for (i = 0; i < 6; i++) h[i] -= tmp[i];
+        }
     }
     dense_matvec(U, h, tmp, d, 6);
     for (i = 0; i < d; i++) qdd[i] = rho[i] - tmp[i];
-    dense_matvec(W, h, f, 6, 6);
+    dca_apply_W(L, n, h, f);
     for (i = 0; i < 6; i++) f[i] += gamma[i];
 
     for (i = 0, ci = 0; i < nA; i++) {

@@ -13,6 +13,9 @@ void dca_leaf_b(aqs_linkage *L, int32_t n);
  * the principal joint's position and force. Returns 0, or -1 when the
  * articulated inertia is numerically singular. */
 int dca_node_update(aqs_linkage *L, int32_t n);
+/* out = W h for internal node n (W = V - V S U, applied through the stored
+ * Cholesky factor of T; zero for a free joint). */
+void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6]);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces. */

@@ -38,16 +38,15 @@ static inline void dense_mul66(const double *A, const double *B, double *C)
     }
 }
 
-/* C = A B^T */
+/* C = A B^T (through B^T, so that the inner loop runs over contiguous
+ * entries and vectorizes) */
 static inline void dense_mul66_nt(const double *A, const double *B, double *C)
 {
-    int i, j, l;
+    double Bt[36];
+    int i, j;
     for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double s = 0.0;
-            for (l = 0; l < 6; l++) s += A[6 * i + l] * B[6 * j + l];
-            C[6 * i + j] = s;
-        }
+        for (j = 0; j < 6; j++) Bt[6 * j + i] = B[6 * i + j];
+    dense_mul66(A, Bt, C);
 }
 
 /* y = A x */

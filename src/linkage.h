@@ -32,9 +32,9 @@ typedef struct {
     int64_t handles;      /* nh effective joint indices, in tree.handles */
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
     int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
-    int64_t M;            /* [Phi^A_ok X^T; -Phi^B_ok] (6nh x 6) */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
-    int64_t W, U, rho, gamma, S; /* §3.4: W (6x6), U (d x 6), rho (d), gamma (6), S (6 x d) */
+    int64_t W;            /* Cholesky factor C of T = V^{-1} (6x6 lower); W = V - V S U */
+    int64_t U, VS, rho, gamma, S; /* §3.4: U (d x 6), V S (6 x d), rho (d), gamma (6), S (6 x d) */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
@@ -54,7 +54,9 @@ typedef struct {
     int32_t *leaf_of_comp; /* ncomp + 1 */
     int32_t height, max_handles;
     double mean_handles;
-    double *scratch; /* 36 * (max_handles + 2) doubles */
+    double *scratch;  /* 84 * (max_handles + 2) doubles */
+    double *mscratch; /* 36 * (max_handles + 1): M = [Phi^A_ok X^T; -Phi^B_ok] of the node
+                         being updated (6nh x 6), not stored per node */
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
     double *tdata;
     double *tscratch; /* the stacked matrix of one node */

@@ -13,6 +13,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "dca.h"
 #include "dense.h"
 #include "pool.h"
 
@@ -52,13 +53,13 @@ void totalacc_free(aqs_linkage *L)
 
 /* row (length 6nh+1) += g^T F for F = [W M^T, gamma]: block c gets
  * M_c (W g), the last entry g . gamma. */
-static void add_gF(const double *g, const double *W, const double *M, const double *gamma,
-                   int32_t nh, double *row)
+static void add_gF(const aqs_linkage *L, int32_t n, const double *g, const double *M,
+                   const double *gamma, int32_t nh, double *row)
 {
     double w[6], tmp[6];
     int32_t c, i;
     double s = 0.0;
-    dense_matvec6(W, g, w);
+    dca_apply_W(L, n, g, w);
     for (c = 0; c < nh; c++) {
         dense_matvec6(M + 36 * c, w, tmp);
         for (i = 0; i < 6; i++) row[6 * c + i] += tmp[i];
@@ -73,7 +74,8 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *W = t->data + C->W, *U = t->data + C->U, *M = t->data + C->M;
+    /* M of this node, left in the scratch by dca_node_update just before */
+    const double *U = t->data + C->U, *M = t->mscratch;
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     const pose *J = t->poses + C->J;
     int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, rows = 0, r, i, c, kept;
@@ -97,7 +99,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
             /* -(T_A)_k X^T F: the row g^T = (T_A)_k X^T is X applied to (T_A)_k. */
             spatial_xform_motion(J, tr + 6 * C->ka, g);
             for (i = 0; i < 6; i++) g[i] = -g[i];
-            add_gF(g, W, M, gamma, nh, row);
+            add_gF(L, n, g, M, gamma, nh, row);
         }
     }
     /* T_B E_B */
@@ -114,7 +116,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
                 c++;
             }
             row[cols - 1] += tr[cb - 1];
-            add_gF(tr + 6 * C->kb, W, M, gamma, nh, row);
+            add_gF(L, n, tr + 6 * C->kb, M, gamma, nh, row);
         }
     }
     /* K = [-U M^T, rho] */

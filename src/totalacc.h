@@ -10,7 +10,8 @@
 aqs_status totalacc_enable(aqs_linkage *L);
 void totalacc_free(aqs_linkage *L);
 /* T_C of an internal node from its children's factors and the node's DCA
- * coefficients (call after dca_node_update). */
+ * coefficients. Call right after dca_node_update on the same node: it reads
+ * the node's M = [Phi^A_ok X^T; -Phi^B_ok] from the tree's scratch. */
 void totalacc_node_update(aqs_linkage *L, int32_t n);
 /* A(n) at the handle forces stored in the node (its x). */
 double totalacc_eval(const aqs_linkage *L, int32_t n);
