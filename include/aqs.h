@@ -269,6 +269,15 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *linkage, int32_t metri
  *  eps = 0 also uses the adaptive solver. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
 AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *linkage, int32_t max_joints);
 
+/** Which bound the joint-wise measures (AQS_METRIC_ABS_JOINT, _REL_JOINT)
+ *  stop on: AQS_JOINT_BOUND_HEAP_TOP (default), the tighter
+ *  sqrt(max_{queued} A(C)) of MATH.md §6.1, or AQS_JOINT_BOUND_SUM, the
+ *  paper's sqrt(sum_{queued} A(C)). Both are certified; the heap top computes
+ *  fewer joints for the same eps. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+#define AQS_JOINT_BOUND_HEAP_TOP 0
+#define AQS_JOINT_BOUND_SUM 1
+AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *linkage, int32_t kind);
+
 /** Refine the last solve down to a smaller eps (same measure) by continuing
  *  its priority queue instead of starting over. Valid only right after a
  *  solve or refine, before anything changes positions or loads; otherwise

@@ -131,8 +131,12 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
     case AQS_METRIC_REL_LINKAGE: return s->a_root > 0.0 ? sqrt(sum) / sqrt(s->a_root) : 0.0;
-    case AQS_METRIC_ABS_JOINT: return sqrt(top);
-    default: return top > 0.0 ? sqrt(top) / s->lower : 0.0;
+    default: {
+        /* joint-wise: the heap top, or the paper's sqrt of the sum */
+        double b = s->joint_bound == AQS_JOINT_BOUND_SUM ? sum : top;
+        if (s->metric == AQS_METRIC_ABS_JOINT) return sqrt(b);
+        return b > 0.0 ? sqrt(b) / s->lower : 0.0;
+    }
     }
 }
 

@@ -666,6 +666,19 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
+{
+    static const char fn[] = "aqs_linkage_set_joint_bound";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if (kind != AQS_JOINT_BOUND_HEAP_TOP && kind != AQS_JOINT_BOUND_SUM)
+        return lk_fail(L, AQS_EINVAL, "%s: kind = %d is not an AQS_JOINT_BOUND_* value", fn, (int)kind);
+    L->s.joint_bound = kind;
+    L->s.valid = 0;
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_refine(aqs_linkage *L, double eps)
 {
     static const char fn[] = "aqs_linkage_refine";

@@ -101,6 +101,7 @@ typedef struct {
     int32_t metric;       /* AQS_METRIC_* */
     double eps;           /* 0 = exact */
     int32_t max_computed; /* 0 = no cap */
+    int32_t joint_bound;  /* AQS_JOINT_BOUND_* */
     int enabled;          /* total-acceleration factors are maintained */
     /* results */
     int all;              /* the last solve computed every joint (exact path) */

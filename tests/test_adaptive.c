@@ -283,6 +283,116 @@ static void test_bound_holds_random(void **state)
     assert_true(t.checks == 500 * 4 * 21);
 }
 
+/* The paper's sqrt(sum) bound for the joint measures is certified too, and
+ * the heap-top bound never computes more joints for the same eps. */
+static void test_joint_bound_kinds(void **state)
+{
+    uint64_t rng = 2024;
+    tally t = {0, 0, 0, 0};
+    long ne_top = 0, ne_sum = 0;
+    int c, k, metric;
+    (void)state;
+    for (c = 0; c < 100; c++) {
+        spec sp = {2 + (int32_t)test_uniform(&rng, 0, 120), c % 3 == 0, c % 2, 5, 0, 3.0};
+        aqs_linkage *L = random_linkage(&rng, &sp);
+        assert_int_equal(aqs_linkage_set_joint_bound(L, AQS_JOINT_BOUND_SUM), AQS_OK);
+        check_bounds(L, &t, 1e-15 * solution_norm(L));
+        for (metric = AQS_METRIC_ABS_JOINT; metric <= AQS_METRIC_REL_JOINT; metric++)
+            for (k = 0; k <= 20; k++) {
+                aqs_solve_stats st;
+                int kind;
+                st.size = sizeof st;
+                for (kind = 0; kind < 2; kind++) {
+                    assert_int_equal(aqs_linkage_set_joint_bound(L, kind), AQS_OK);
+                    assert_int_equal(aqs_linkage_set_tolerance(L, metric, ldexp(1.0, -k)), AQS_OK);
+                    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+                    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+                    if (kind == AQS_JOINT_BOUND_HEAP_TOP) ne_top += st.computed_joints;
+                    else ne_sum += st.computed_joints;
+                }
+            }
+        aqs_linkage_destroy(L);
+    }
+    print_message("paper's sum bound: %ld checks, %ld violations; joints computed over the "
+                  "joint measures: heap top %ld, sum %ld (%.1f%% fewer)\n",
+                  t.checks, t.violations, ne_top, ne_sum, 100.0 * (ne_sum - ne_top) / ne_sum);
+    assert_int_equal(t.violations, 0);
+    assert_true(ne_top <= ne_sum);
+    assert_int_equal(aqs_linkage_set_joint_bound(NULL, 0), AQS_EINVAL);
+}
+
+/* Anytime control: the cap stops the solve with an honest bound; refine
+ * continues the same queue; uncomputed joints read 0 and NaN. */
+static void test_cap_refine_and_outputs(void **state)
+{
+    uint64_t rng = 31337;
+    spec sp = {200, 0, 1, 10, 0, 3.0};
+    aqs_linkage *L = random_linkage(&rng, &sp);
+    int32_t nv = L->nv, nj = L->njoints, j, computed, uncomputed = 0;
+    double *exact = malloc(sizeof(double) * (size_t)nv), *approx = malloc(sizeof(double) * (size_t)nv);
+    double *f = malloc(sizeof(double) * 6 * (size_t)nj), err, f1[3] = {1, 2, 3};
+    aqs_solve_stats st;
+    (void)state;
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, exact, (size_t)nv), AQS_OK);
+    /* the cap */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_LINKAGE, 1e-12), AQS_OK);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 7), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.capped, 1);
+    assert_int_equal(st.computed_joints, 7);
+    assert_int_equal(aqs_linkage_get_accelerations(L, approx, (size_t)nv), AQS_OK);
+    err = true_error(L, AQS_METRIC_REL_LINKAGE, exact, approx);
+    assert_true(err <= st.error_bound * (1 + REL_SLACK) && st.error_bound > 1e-12);
+    /* uncomputed joints: acceleration 0, constraint force NaN, flag 0 */
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
+    for (j = 0; j < nj; j++) {
+        int32_t off, n, k;
+        assert_int_equal(aqs_joint_get_computed(L, j, &computed), AQS_OK);
+        assert_int_equal(aqs_joint_get_layout(L, j, NULL, NULL, &off, &n), AQS_OK);
+        if (!computed && n > 0) {
+            uncomputed++;
+            assert_true(isnan(f[6 * j]));
+            for (k = 0; k < n; k++) assert_true(approx[off + k] == 0.0);
+        }
+        if (computed) assert_true(!isnan(f[6 * j]));
+    }
+    assert_true(uncomputed > 100);
+    /* refine continues the queue down to a smaller eps */
+    assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_refine(L, 1e-3), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_true(st.error_bound <= 1e-3 && st.computed_joints > 7 && !st.capped);
+    assert_int_equal(aqs_linkage_get_accelerations(L, approx, (size_t)nv), AQS_OK);
+    err = true_error(L, AQS_METRIC_REL_LINKAGE, exact, approx);
+    assert_true(err <= st.error_bound * (1 + REL_SLACK));
+    /* the same joints as a fresh solve at that eps? at least no more joints */
+    {
+        int32_t refined = st.computed_joints;
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_LINKAGE, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(st.computed_joints, refined); /* same heap order, same stop */
+    }
+    /* refine is refused once a load changed; bad arguments are refused */
+    assert_int_equal(aqs_body_set_force(L, 3, f1, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_refine(L, 1e-6), AQS_ESTATE);
+    assert_int_equal(aqs_linkage_refine(L, NAN), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tolerance(L, 7, 1e-3), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_JOINT, -1.0), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_JOINT, INFINITY), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_max_computed(L, -2), AQS_EINVAL);
+    assert_true(strstr(aqs_linkage_last_error(L), "max_joints") != NULL);
+    st.size = 4;
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_EINVAL);
+    free(exact);
+    free(approx);
+    free(f);
+    aqs_linkage_destroy(L);
+}
+
 /* No A(node) negative or non-finite, at the forces of the exact solve. */
 static void check_node_values(aqs_linkage *L)
 {
@@ -609,6 +719,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bound_holds_random),
+        cmocka_unit_test(test_joint_bound_kinds),
+        cmocka_unit_test(test_cap_refine_and_outputs),
         cmocka_unit_test(test_hard_gravity_compensated),
         cmocka_unit_test(test_hard_chain_and_mass_ratios),
         cmocka_unit_test(test_lazy_equals_eager),
