@@ -11,9 +11,12 @@
  *  - Bodies and joints are named by int32_t indices, in the order they were
  *    added, starting at 0. AQS_WORLD (-1) names the fixed world.
  *  - Every fallible function returns an aqs_status: AQS_OK (0) or a negative
- *    code. A failed call leaves the linkage exactly as it was, and
- *    aqs_linkage_last_error() then names the argument and value that were
- *    wrong. Nothing aborts, exits or prints.
+ *    code. A failed call leaves the linkage as it was (model, positions,
+ *    loads, settings), and aqs_linkage_last_error() then names the argument
+ *    and value that were wrong. The one exception is a numerical failure
+ *    (AQS_ENUMERIC) of solve, step or refine: positions are restored but the
+ *    results of the failed solve are not readable until the next successful
+ *    one. Nothing aborts, exits or prints.
  *  - Non-finite inputs (NaN, +-Inf) are rejected with AQS_EINVAL.
  *  - A linkage is used by one thread at a time; different linkages are
  *    independent. There is no global mutable state.
@@ -266,7 +269,9 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *linkage, int32_t metri
 /** Anytime control: stop a solve once max_joints joint accelerations are
  *  computed (0, the default, means no cap), reporting the bound reached.
  *  Joints on the path to a floating base may exceed the cap. A cap with
- *  eps = 0 also uses the adaptive solver. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+ *  eps = 0 also uses the adaptive solver (allocating the total-acceleration
+ *  factors like aqs_linkage_set_tolerance). Returns AQS_OK, AQS_EINVAL,
+ *  AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *linkage, int32_t max_joints);
 
 /** Which bound the joint-wise measures (AQS_METRIC_ABS_JOINT, _REL_JOINT)
@@ -295,7 +300,7 @@ typedef struct aqs_solve_stats {
     double eps;              /**< the bound asked for (0 = exact) */
     double error_bound;      /**< certified bound on the measure achieved (0 when exact) */
     int32_t computed_joints; /**< N_E: joint accelerations computed (free joints excluded) */
-    int32_t counted_joints;  /**< joints that count for the measures (all but free joints) */
+    int32_t counted_joints;  /**< joints that count for the measures (all but free and fixed) */
     int32_t nodes_updated;   /**< assembly-tree nodes recomputed by the last coefficient update */
     int32_t nodes_processed; /**< internal nodes back-substituted by the last solve */
     int32_t capped;          /**< 1 if the last solve stopped at the max_computed cap */

@@ -50,7 +50,7 @@ static void reset_outputs(aqs_linkage *L)
     solve_state *s = &L->s;
     const model *m = &L->m;
     int32_t i, k;
-    if (s->all || !s->valid) {
+    if (s->all || !s->tracked) {
         for (i = 0; i < L->nv; i++) L->qdd[i] = 0.0;
         for (i = 0; i < 6 * L->njoints; i++) L->cforce[i] = NAN;
     } else {
@@ -73,6 +73,7 @@ static void reset_outputs(aqs_linkage *L)
     s->nreached = 0;
     s->computed = 0;
     s->all = 0;
+    s->tracked = 1; /* from here on the lists describe the outputs */
 }
 
 static double norm_qdd(const aqs_linkage *L, int32_t n)
@@ -200,6 +201,7 @@ void adaptive_solve(aqs_linkage *L)
         s->bound = 0.0;
         s->a_root = 0.0;
         if (L->m.comp_welded[L->m.ncomp]) dca_welded_forces_comp(L, L->m.ncomp);
+        s->valid = 1;
         return;
     }
     if (s->eps == 0.0 && s->max_computed == 0) {

@@ -389,7 +389,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         }
     update_all_poses(L);
     update_mark_all(L);
-    if (L->s.eps > 0.0 && (st = totalacc_enable(L)) != AQS_OK) {
+    if (L->s.eps > 0.0 && (st = totalacc_enable(L, fn)) != AQS_OK) {
         free_solver(L);
         return st;
     }
@@ -640,7 +640,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     if (!isfinite(eps) || eps < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
     if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
-        if ((st = totalacc_enable(L)) != AQS_OK) return st;
+        if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
         update_mark_all(L);
     }
     L->s.metric = metric;
@@ -658,7 +658,7 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
     if (max_joints < 0)
         return lk_fail(L, AQS_EINVAL, "%s: max_joints = %d must be >= 0", fn, (int)max_joints);
     if (max_joints > 0 && !L->t.tdata && L->t.nnodes > 0) {
-        if ((st = totalacc_enable(L)) != AQS_OK) return st;
+        if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
         update_mark_all(L);
         L->s.valid = 0;
     }

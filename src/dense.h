@@ -22,7 +22,6 @@ void dense_symmetrize(double *A, int n);
  * the result is not finite. out may alias A. */
 int dense_spd_inverse(const double *A, double *out, int n);
 
-#endif
 
 /* Fixed-size 6x6 kernels (the hot path): the compiler unrolls them. */
 static inline void dense_mul66(const double *A, const double *B, double *C)
@@ -85,3 +84,5 @@ void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, in
  * first min(m, n) rows hold the upper-trapezoidal R (entries below the
  * diagonal zeroed); the other rows are garbage. Returns min(m, n). */
 int dense_qr_r(double *A, int m, int n);
+
+#endif

@@ -105,7 +105,8 @@ typedef struct {
     int enabled;          /* total-acceleration factors are maintained */
     /* results */
     int all;              /* the last solve computed every joint (exact path) */
-    int valid;            /* heap and processed list are those of the last solve */
+    int valid;            /* heap and queue still match positions and loads (refine allowed) */
+    int tracked;          /* the processed/reached lists describe the current outputs */
     int32_t *processed;   /* internal nodes processed, in order */
     int32_t nprocessed;
     int32_t *reached;     /* composites with welded bodies whose leaf got its forces */

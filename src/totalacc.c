@@ -17,7 +17,7 @@
 #include "dense.h"
 #include "pool.h"
 
-aqs_status totalacc_enable(aqs_linkage *L)
+aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
 {
     tree *t = &L->t;
     int64_t size = 0;
@@ -34,8 +34,8 @@ aqs_status totalacc_enable(aqs_linkage *L)
     if (!tdata || !scratch) {
         lk_free(L, tdata);
         lk_free(L, scratch);
-        return lk_fail(L, AQS_ENOMEM, "aqs_linkage_set_tolerance: out of memory for %lld total-acceleration coefficients",
-                       (long long)size);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld total-acceleration coefficients",
+                       fn, (long long)size);
     }
     t->tdata = tdata;
     t->tscratch = scratch;

@@ -7,7 +7,7 @@
 
 /* Allocate the factors of every node (first use of adaptive solving).
  * Returns AQS_OK or AQS_ENOMEM (nothing changed). */
-aqs_status totalacc_enable(aqs_linkage *L);
+aqs_status totalacc_enable(aqs_linkage *L, const char *fn);
 void totalacc_free(aqs_linkage *L);
 /* T_C of an internal node from its children's factors and the node's DCA
  * coefficients. Call right after dca_node_update on the same node: it reads

@@ -6,56 +6,10 @@ import numpy as np
 import pytest
 
 import aqs
-from aqs_testutil import NV, apply_state, build, dense_solve, quat_to_matrix, rel_err
+from aqs_testutil import (ONE_DOF_OR_MORE, apply_state, build, dense_solve, random_case,
+                          random_position, rel_err)
 
 TOL = 1e-8
-ONE_DOF_OR_MORE = ["revolute", "prismatic", "spherical", "universal", "cylindrical", "planar"]
-
-
-def random_quat(rng):
-    q = rng.normal(size=4)
-    return q / np.linalg.norm(q)
-
-
-def random_position(kind, rng):
-    if kind == "spherical":
-        return list(random_quat(rng))
-    if kind == "free":
-        return list(rng.normal(size=3)) + list(random_quat(rng))
-    return list(rng.normal(size={"revolute": 1, "prismatic": 1, "fixed": 0, "universal": 2,
-                                 "cylindrical": 2, "planar": 3}[kind]))
-
-
-def random_case(rng, kinds, tree=False, floating=False, mass_range=(0.5, 2.0), loads=True):
-    """A case dict (vector format) with joint i from parent to body i."""
-    n = len(kinds)
-    bodies, joints, positions = [], [], []
-    for i, kind in enumerate(kinds):
-        p = rng.uniform(0.5, 1.0, size=3)
-        R = quat_to_matrix(random_quat(rng))
-        m = np.exp(rng.uniform(*np.log(mass_range)))
-        bodies.append({"mass": m, "com": list(rng.normal(size=3) * 0.3),
-                       "inertia": (m * R @ np.diag(p) @ R.T).tolist()})
-        if i == 0:
-            parent, kind = -1, ("free" if floating else kind)
-        else:
-            parent = int(rng.integers(0, i)) if tree else i - 1
-        joints.append({"type": kind, "parent": parent, "child": i,
-                       "pos": list(rng.normal(size=3) * 0.5), "quat": list(random_quat(rng)),
-                       "axis": list(rng.normal(size=3))})
-        positions += random_position(kind, rng)
-    case = {"bodies": bodies, "joints": joints, "positions": positions,
-            "gravity": list(rng.normal(size=3) * 5), "body_forces": [], "joint_forces": []}
-    if loads:
-        for i in rng.choice(n, size=max(1, n // 3), replace=False):
-            case["body_forces"].append({"body": int(i), "force": list(rng.normal(size=3)),
-                                        "point": list(rng.normal(size=3)),
-                                        "torque": list(rng.normal(size=3))})
-        for k, j in enumerate(joints):
-            if NV[j["type"]] and j["type"] != "free":
-                case["joint_forces"].append({"joint": k,
-                                             "tau": list(rng.normal(size=NV[j["type"]]))})
-    return case
 
 
 def check(L, case, tol=TOL):

@@ -1,5 +1,6 @@
 """The bindings' table matches include/aqs.h: every function declared, with the
-same arity and compatible types; every constant with the same value."""
+same arity and compatible types; every constant with the same value; every
+struct mirrored field for field."""
 
 import ctypes
 import os
@@ -52,7 +53,12 @@ PARAMS = {
     "int32_t *": [_lib.int32_p], "const double *": [_lib.din, _lib.din_or_null],
     "double *": [_lib.dout, _lib.dout_or_null, _lib.double_p],
     "aqs_alloc_fn": [_lib.alloc_fn], "aqs_free_fn": [_lib.free_fn],
+    "aqs_solve_stats *": [ctypes.POINTER(_lib.aqs_solve_stats)],
 }
+#: C types of struct fields -> the ctypes type that mirrors them.
+FIELD_TYPES = {"uint32_t": ctypes.c_uint32, "int32_t": ctypes.c_int32, "double": ctypes.c_double}
+#: Each struct of the header -> its ctypes.Structure.
+STRUCTS = {"aqs_solve_stats": _lib.aqs_solve_stats}
 
 
 def normalize(c_type):
@@ -83,9 +89,33 @@ def test_constants_match(header):
         if name.startswith("AQS_VERSION"):
             continue
         short = name[len("AQS_"):]
-        if short.startswith("JOINT_"):
+        if short.startswith("JOINT_BOUND_"):
+            assert aqs.JOINT_BOUNDS[short[len("JOINT_BOUND_"):].lower()] == int(value), name
+        elif short.startswith("JOINT_"):
             assert aqs.JOINT_KINDS[short[len("JOINT_"):].lower()] == int(value), name
+        if short.startswith("METRIC_"):
+            assert aqs.METRICS[short[len("METRIC_"):].lower()] == int(value), name
         assert getattr(aqs, short) == int(value), name
     codes = {int(v) for k, v in defines.items() if k in ("AQS_OK",) or k.startswith("AQS_E")}
     assert codes == set(_lib.STATUS_NAMES)
     assert set(aqs._errors.BY_STATUS) == codes - {0}
+    for prefix, table in (("AQS_JOINT_BOUND_", aqs.JOINT_BOUNDS), ("AQS_METRIC_", aqs.METRICS)):
+        assert len(table) == sum(k.startswith(prefix) for k in defines), prefix
+    kinds = [k for k in defines if k.startswith("AQS_JOINT_") and "BOUND" not in k]
+    assert len(aqs.JOINT_KINDS) == len(kinds)
+
+
+def test_structs_match(header):
+    """Every struct of the header, field for field (names, order, types)."""
+    found = re.findall(r"typedef\s+struct\s+(aqs_\w+)\s*\{(.*?)\}\s*(\w+)\s*;", header, re.S)
+    assert {tag for tag, _, _ in found} == set(STRUCTS)
+    for tag, body, name in found:
+        assert name == tag
+        fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
+        mirror = STRUCTS[tag]
+        assert [(n, FIELD_TYPES[t]) for t, n in fields] == list(mirror._fields_), tag
+    # The C layout with natural alignment: no padding, 48 bytes.
+    stats = _lib.aqs_solve_stats
+    assert ctypes.sizeof(stats) == 48
+    assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
+    assert stats.reserved.offset == 44

@@ -33,4 +33,25 @@ int32_t test_add_joint(aqs_linkage *L, int32_t type, int32_t parent, int32_t chi
 /* Relative 2-norm difference of two vectors (absolute if b is zero). */
 double test_rel_diff(const double *a, const double *b, size_t n);
 
+/* ---- Added for the per-concept unit tests. ----
+ * Reference geometry written independently of src/spatial.c (other
+ * formulas), so that a test comparing against it can catch a library bug. */
+
+/* Largest absolute difference of two vectors. */
+double test_max_abs_diff(const double *a, const double *b, size_t n);
+/* Rotation of angle about axis (any non-zero length) by Rodrigues' formula
+ * R = I + sin(t) K + (1 - cos(t)) K^2, K = skew(axis / |axis|). */
+void test_rodrigues(const double axis[3], double angle, double R[9]);
+/* Rotation matrix of a unit quaternion (w, x, y, z) as
+ * R = (w^2 - v.v) I + 2 v v^T + 2 w skew(v). */
+void test_quat_matrix(const double q[4], double R[9]);
+/* C = A B for 3x3 row-major matrices (C may not alias A or B). */
+void test_mat3_mul(const double A[9], const double B[9], double C[9]);
+/* A uniformly distributed unit quaternion with w >= 0 (Shoemake). */
+void test_random_quat(uint64_t *state, double q[4]);
+/* Fails the test, printing both strings, unless needle occurs in text. */
+void test_assert_contains(const char *text, const char *needle);
+/* Create a linkage with malloc/free; asserts success. */
+aqs_linkage *test_new_linkage(void);
+
 #endif

@@ -17,8 +17,10 @@ is the fixed world.
         L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
         L.finalize()
         L.set_gravity((0, -9.81, 0))
-        L.solve()
-        print(L.accelerations())
+        stats = L.solve()                 # exact by default
+        print(L.accelerations(), stats.computed_joints)
+        L.set_tolerance("rel_joint", 1e-6)  # error-bounded adaptive solving
+        print(L.solve().error_bound)
 
 The shared library is found through AQS_LIBRARY (a path), then a libaqs.so*
 inside this package, then the source checkout's build/, then the system
@@ -27,6 +29,7 @@ inside this package, then the source checkout's build/, then the system
 
 import collections
 import ctypes
+import dataclasses
 import operator
 
 import numpy as np
@@ -36,16 +39,20 @@ from ._errors import (Error, InvalidArgument, ModelError, NumericError, OutOfMem
                       RangeError, SizeError, StateError)
 from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOINT_CYLINDRICAL,
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
-                   JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, OK, WORLD)
+                   JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
+                   JOINT_BOUND_SUM, JOINT_BOUNDS, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE,
+                   METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._errors import from_status as _from_status
 
 __all__ = [
     "Linkage", "version", "version_number", "status_string", "library_path",
     "Error", "InvalidArgument", "RangeError", "StateError", "OutOfMemoryError", "ModelError",
-    "NumericError", "SizeError", "Sizes", "JointLayout",
+    "NumericError", "SizeError", "Sizes", "JointLayout", "SolveStats",
     "WORLD", "OK", "EINVAL", "ERANGE", "ESTATE", "ENOMEM", "EMODEL", "ENUMERIC", "ESIZE",
     "JOINT_REVOLUTE", "JOINT_PRISMATIC", "JOINT_SPHERICAL", "JOINT_FREE", "JOINT_FIXED",
     "JOINT_UNIVERSAL", "JOINT_CYLINDRICAL", "JOINT_PLANAR", "JOINT_KINDS",
+    "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
+    "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
 ]
 
 __version__ = "0.1.0"
@@ -63,6 +70,45 @@ Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (
 JointLayout = collections.namedtuple("JointLayout", "q_offset nq v_offset nv")
 JointLayout.__doc__ = ("Where a joint's values sit in the bulk arrays: q_offset/nq in "
                        "positions(), v_offset/nv in accelerations() and joint forces.")
+
+
+@dataclasses.dataclass(frozen=True)
+class SolveStats:
+    """Statistics of the last solve (aqs_solve_stats), as returned by
+    Linkage.solve(), step(), refine() and stats().
+
+    metric: the error measure in force, "abs_linkage", "rel_linkage",
+        "abs_joint" or "rel_joint" (see Linkage.set_tolerance).
+    eps: the bound asked for (0.0 = exact), in the measure's unit: m/s^2 or
+        rad/s^2 (as the accelerations) for the absolute measures, a pure
+        number for the relative ones.
+    error_bound: certified upper bound on that measure for this solve (0.0
+        when every joint was computed), same unit as eps; <= eps unless the
+        solve was capped.
+    computed_joints: joint accelerations computed (N_E; free joints excluded).
+    counted_joints: joints the measures count: every joint but free ones and
+        fixed ones (which have no acceleration).
+    nodes_updated: assembly-tree nodes recomputed by the last coefficient
+        update (after step(), the update that followed the move).
+    nodes_processed: internal tree nodes back-substituted by the solve.
+    capped: True if the solve stopped at the set_max_computed cap.
+    """
+
+    metric: str
+    eps: float
+    error_bound: float
+    computed_joints: int
+    counted_joints: int
+    nodes_updated: int
+    nodes_processed: int
+    capped: bool
+
+    @classmethod
+    def _from_c(cls, c):
+        return cls(metric=_lib.METRIC_NAMES.get(c.metric, str(c.metric)), eps=float(c.eps),
+                   error_bound=float(c.error_bound), computed_joints=int(c.computed_joints),
+                   counted_joints=int(c.counted_joints), nodes_updated=int(c.nodes_updated),
+                   nodes_processed=int(c.nodes_processed), capped=bool(c.capped))
 
 
 def version():
@@ -136,13 +182,26 @@ def _joint_kind(kind):
     return _index(kind, "aqs_joint_add", "type")
 
 
+def _named(value, names, function, name):
+    """A constant given by its name in names (case-insensitive) or as an int."""
+    if isinstance(value, str):
+        try:
+            return names[value.lower()]
+        except KeyError:
+            raise InvalidArgument("%s: %s = %r is not one of %s"
+                                  % (function, name, value, ", ".join(sorted(names)))) from None
+    return _index(value, function, name)
+
+
 class Linkage:
     """An articulated linkage: owns one aqs_linkage handle.
 
     Build it (add_body, add_joint), finalize() it, set loads, then solve() or
-    step(). close() releases the handle (also on `with` exit and on garbage
-    collection); closing twice is fine; any other call on a closed linkage
-    raises StateError.
+    step() (both return SolveStats); set_tolerance / set_max_computed make
+    the solves error-bounded and adaptive, refine() tightens one. close()
+    releases the handle (also on `with` exit and on garbage collection);
+    closing twice is fine; any other call on a closed linkage raises
+    StateError.
     """
 
     def __init__(self):
@@ -375,13 +434,86 @@ class Linkage:
     # -- solving and stepping ------------------------------------------------------
 
     def solve(self):
-        """Solve the quasi-statics at the current positions and loads (aqs_linkage_solve)."""
+        """Solve the quasi-statics at the current positions and loads
+        (aqs_linkage_solve); returns its SolveStats.
+
+        Exact by default. With a tolerance (set_tolerance) or a cap
+        (set_max_computed) only the joints that matter are computed; the
+        others read acceleration 0 and constraint force NaN (joint_computed).
+        """
         self._call("aqs_linkage_solve")
+        return self.stats()
 
     def step(self, dt):
-        """Solve, then move every joint by q <- q (+) dt^2 qdd (aqs_linkage_step).
+        """Solve, then move every computed joint by q <- q (+) dt^2 qdd
+        (aqs_linkage_step); returns the SolveStats of that solve (whose
+        nodes_updated counts the coefficient update after the move).
         dt: s, > 0. Accelerations read afterwards are those of this step's solve."""
         self._call("aqs_linkage_step", float(dt))
+        return self.stats()
+
+    # -- error-bounded adaptive solving ----------------------------------------------
+
+    def set_tolerance(self, metric, eps):
+        """Set the error measure and its bound for the next solves
+        (aqs_linkage_set_tolerance). After finalize only (StateError before).
+
+        metric: "abs_linkage" (sqrt of the sum of ||qdd_j||^2 over the joints
+        not computed), "rel_linkage" (that / the same over all joints),
+        "abs_joint" (max ||qdd_j|| over the joints not computed), "rel_joint"
+        (that / max ||qdd_j|| over all joints), or an aqs.METRIC_* constant.
+        ||qdd_j|| is the 2-norm of joint j's acceleration vector; free joints
+        are always computed exactly and not counted.
+        eps: finite, >= 0; m/s^2 or rad/s^2 for the absolute measures, a pure
+        number for the relative ones. 0 (the default) means exact.
+        """
+        f = "aqs_linkage_set_tolerance"
+        self._call(f, _named(metric, METRICS, f, "metric"), float(eps))
+
+    def set_max_computed(self, max_joints):
+        """Anytime control: stop a solve once max_joints joint accelerations are
+        computed (0, the default, means no cap); the bound reached is reported
+        (SolveStats.error_bound, capped=True). Joints on the path to a floating
+        base may exceed the cap. (aqs_linkage_set_max_computed)"""
+        f = "aqs_linkage_set_max_computed"
+        self._call(f, _index(max_joints, f, "max_joints"))
+
+    def set_joint_bound(self, kind):
+        """Which certified bound the joint-wise measures ("abs_joint",
+        "rel_joint") stop on (aqs_linkage_set_joint_bound): "heap_top" (the
+        default; sqrt of the largest queued total acceleration, tighter, so
+        fewer joints are computed for the same eps) or "sum" (the paper's
+        sqrt of their sum), or an aqs.JOINT_BOUND_* constant. After finalize."""
+        f = "aqs_linkage_set_joint_bound"
+        self._call(f, _named(kind, JOINT_BOUNDS, f, "kind"))
+
+    def refine(self, eps):
+        """Refine the last solve down to a smaller eps, same measure, by
+        continuing it rather than starting over (aqs_linkage_refine); returns
+        the SolveStats. Only right after solve() or refine(), before positions
+        (a step moves them), loads, the tolerance or the joint bound change
+        (StateError otherwise). eps >= the bound
+        already reached does nothing; the max_computed cap still applies."""
+        f = "aqs_linkage_refine"
+        self._call(f, float(eps))
+        return self.stats()
+
+    def stats(self):
+        """SolveStats of the last solve or refine (aqs_linkage_get_stats);
+        StateError before any solve."""
+        c = _lib.aqs_solve_stats()
+        c.size = ctypes.sizeof(_lib.aqs_solve_stats)
+        self._call("aqs_linkage_get_stats", ctypes.byref(c))
+        return SolveStats._from_c(c)
+
+    def joint_computed(self, joint):
+        """Whether the last solve computed joint j (aqs_joint_get_computed). An
+        uncomputed joint reads acceleration 0 and constraint force NaN (a fixed
+        joint counts as computed once its rigid group was reached)."""
+        f = "aqs_joint_get_computed"
+        out = ctypes.c_int32()
+        self._call(f, _index(joint, f, "joint"), ctypes.byref(out))
+        return bool(out.value)
 
     # -- reading back and setting state ----------------------------------------------
 
@@ -418,7 +550,8 @@ class Linkage:
         """All joint accelerations of the last solve, (nv) in joint order, m/s^2 or
         rad/s^2 (aqs_linkage_get_accelerations). Spherical: the child's angular
         acceleration relative to the parent side, child frame. Free: the child's
-        spatial acceleration [dw; dv] in its own body frame, gravity included."""
+        spatial acceleration [dw; dv] in its own body frame, gravity included.
+        Joints an adaptive solve did not compute read 0."""
         f = "aqs_linkage_get_accelerations"
         out = _output(out, self.sizes().nv, f)
         self._call(f, out, out.size)
@@ -435,7 +568,8 @@ class Linkage:
     def constraint_forces(self, out=None):
         """Constraint forces of the last solve, (joints, 6): row j is the spatial
         force joint j exerts on its child, child body frame about its origin,
-        [n; f] in N m and N (aqs_linkage_get_constraint_forces)."""
+        [n; f] in N m and N; NaN rows for joints an adaptive solve did not
+        compute (aqs_linkage_get_constraint_forces)."""
         f = "aqs_linkage_get_constraint_forces"
         out = _output(out, (self.sizes().joints, 6), f)
         self._call(f, out, out.size)

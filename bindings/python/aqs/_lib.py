@@ -61,6 +61,31 @@ JOINT_KINDS = {
     "planar": JOINT_PLANAR,
 }
 
+# Error measures of adaptive solving (AQS_METRIC_*), over the joints a solve
+# did not compute; a joint's error is the 2-norm of its acceleration vector,
+# free joints excluded.
+METRIC_ABS_LINKAGE = 0  # sqrt(sum of ||qdd_j||^2 over uncomputed j)
+METRIC_REL_LINKAGE = 1  # the above / sqrt(sum over all joints)
+METRIC_ABS_JOINT = 2    # max ||qdd_j|| over uncomputed j
+METRIC_REL_JOINT = 3    # the above / max ||qdd_j|| over all joints
+
+METRICS = {
+    "abs_linkage": METRIC_ABS_LINKAGE,
+    "rel_linkage": METRIC_REL_LINKAGE,
+    "abs_joint": METRIC_ABS_JOINT,
+    "rel_joint": METRIC_REL_JOINT,
+}
+METRIC_NAMES = {value: name for name, value in METRICS.items()}
+
+# Which bound the joint-wise measures stop on (AQS_JOINT_BOUND_*).
+JOINT_BOUND_HEAP_TOP = 0  # sqrt(max of the queued A(C)), tighter (default)
+JOINT_BOUND_SUM = 1       # sqrt(sum of the queued A(C)), the paper's
+
+JOINT_BOUNDS = {
+    "heap_top": JOINT_BOUND_HEAP_TOP,
+    "sum": JOINT_BOUND_SUM,
+}
+
 # ---------------------------------------------------------------------------
 # C types
 # ---------------------------------------------------------------------------
@@ -76,6 +101,27 @@ linkage_p = ctypes.POINTER(aqs_linkage)
 status_t = ctypes.c_int32
 int32_p = ctypes.POINTER(ctypes.c_int32)
 double_p = ctypes.POINTER(ctypes.c_double)
+
+
+
+class aqs_solve_stats(ctypes.Structure):
+    """struct aqs_solve_stats, field for field (the caller sets size)."""
+
+    _fields_ = [
+        ("size", ctypes.c_uint32),          # set by the caller: sizeof(aqs_solve_stats)
+        ("metric", ctypes.c_int32),         # AQS_METRIC_* in force
+        ("eps", ctypes.c_double),           # the bound asked for (0 = exact)
+        ("error_bound", ctypes.c_double),   # certified bound achieved (0 when exact)
+        ("computed_joints", ctypes.c_int32),  # joint accelerations computed (free excluded)
+        ("counted_joints", ctypes.c_int32),   # joints counted by the measures (not free)
+        ("nodes_updated", ctypes.c_int32),    # tree nodes recomputed by the last update
+        ("nodes_processed", ctypes.c_int32),  # internal nodes back-substituted by the solve
+        ("capped", ctypes.c_int32),           # 1 if the solve stopped at the max_computed cap
+        ("reserved", ctypes.c_int32),         # 0
+    ]
+
+
+solve_stats_p = ctypes.POINTER(aqs_solve_stats)
 
 alloc_fn = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t)
 free_fn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)
@@ -144,6 +190,13 @@ PROTOTYPES = {
     # Solving and stepping
     "aqs_linkage_solve": (status_t, [linkage_p]),
     "aqs_linkage_step": (status_t, [linkage_p, ctypes.c_double]),
+    # Error-bounded adaptive solving
+    "aqs_linkage_set_tolerance": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_double]),
+    "aqs_linkage_set_max_computed": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_refine": (status_t, [linkage_p, ctypes.c_double]),
+    "aqs_linkage_get_stats": (status_t, [linkage_p, solve_stats_p]),
+    "aqs_joint_get_computed": (status_t, [linkage_p, ctypes.c_int32, int32_p]),
     # Reading back and setting state
     "aqs_linkage_get_positions": (status_t, [linkage_p, dout_or_null, ctypes.c_size_t]),
     "aqs_linkage_set_positions": (status_t, [linkage_p, din_or_null, ctypes.c_size_t]),
