@@ -164,6 +164,17 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *linkage, int32_t type, int32_t par
                                  int32_t child, const double pos[3], const double quat[4],
                                  const double axis[3], int32_t *out_joint);
 
+/** How finalize builds the assembly tree (MATH.md §10).
+ *  AQS_TREE_CONTRACTION (default): tree contraction by rake and compress
+ *  rounds: height O(log N), a node never has more handles than the largest
+ *  body degree. AQS_TREE_BISECTION: recursive bisection at the most
+ *  balancing joint: balanced, but more handles per node on branched trees
+ *  (kept to compare tree shapes). Building phase only.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
+#define AQS_TREE_CONTRACTION 0
+#define AQS_TREE_BISECTION 1
+AQS_API aqs_status aqs_linkage_set_tree_builder(aqs_linkage *linkage, int32_t builder);
+
 /** Validate the linkage and build the assembly tree and all coefficients.
  *  Checks, reporting the first problem by body/joint index (AQS_EMODEL):
  *  at least one body; each body the child of exactly one joint; every body

@@ -204,6 +204,18 @@ AQS_API aqs_status aqs_linkage_set_inertia_check(aqs_linkage *L, int32_t physica
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_set_tree_builder(aqs_linkage *L, int32_t builder)
+{
+    static const char fn[] = "aqs_linkage_set_tree_builder";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    if (builder != AQS_TREE_CONTRACTION && builder != AQS_TREE_BISECTION)
+        return lk_fail(L, AQS_EINVAL, "%s: builder = %d is not an AQS_TREE_* value", fn, (int)builder);
+    L->tree_builder = builder;
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_body_add(aqs_linkage *L, double mass, const double com[3],
                                 const double inertia[9], int32_t *out_body)
 {

@@ -157,6 +157,128 @@ done:
     return st;
 }
 
+/* The other builder (MATH.md §10): recursive bisection. A cluster is split
+ * at the joint that best balances its two sides, recursively; simple and
+ * balanced for chains, but boundary joints accumulate on the nodes of
+ * branched trees (more handles per node). Kept to compare tree shapes. */
+typedef struct {
+    int32_t start, len, stage, edge, split, res[2], up, slot;
+} bisect_frame;
+
+static aqs_status bisect(builder *B, int32_t nvert)
+{
+    aqs_linkage *L = B->L;
+    const model *m = &L->m;
+    const node *nodes = L->t.nodes;
+    int32_t *verts = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
+    int32_t *tag = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
+    int32_t *par = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
+    int32_t *pedge = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
+    int32_t *size = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
+    int32_t *order = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
+    int32_t *stamp = lk_calloc(L, (size_t)L->t.nnodes, sizeof(int32_t));
+    bisect_frame *stack = lk_alloc(L, sizeof(bisect_frame) * (size_t)(nvert + 1));
+    int32_t top = 0, ntag = 0, i, result = -1;
+    aqs_status st = AQS_OK;
+    if (!verts || !tag || !par || !pedge || !size || !order || !stamp || !stack) {
+        st = AQS_ENOMEM;
+        goto done;
+    }
+    for (i = 0; i < nvert; i++) verts[i] = i;
+    stack[0].start = 0;
+    stack[0].len = nvert;
+    stack[0].stage = 0;
+    stack[0].up = -1;
+    top = 1;
+    while (top > 0) {
+        bisect_frame *f = &stack[top - 1];
+        int32_t res = -1;
+        if (f->len == 1) {
+            res = verts[f->start]; /* the leaf node of that vertex */
+        } else if (f->stage == 0) {
+            /* BFS over the cluster from its first vertex: parents and sizes */
+            int32_t head = 0, tail = 0, best = -1, bestgap = INT32_MAX, k;
+            ntag++;
+            for (k = f->start; k < f->start + f->len; k++) tag[verts[k]] = ntag;
+            order[tail++] = verts[f->start];
+            par[verts[f->start]] = -1;
+            while (head < tail) {
+                int32_t v = order[head++], h;
+                for (h = 0; h < nodes[v].nh; h++) {
+                    int32_t e = B->hv[nodes[v].handles + h];
+                    int32_t w = m->eff_parent[e] == v ? m->eff_child[e] : m->eff_parent[e];
+                    if (tag[w] != ntag || w == par[v]) continue;
+                    par[w] = v;
+                    pedge[w] = e;
+                    order[tail++] = w;
+                }
+            }
+            for (k = tail - 1; k >= 0; k--) size[order[k]] = 1;
+            for (k = tail - 1; k > 0; k--) size[par[order[k]]] += size[order[k]];
+            for (k = 1; k < tail; k++) {
+                int32_t gap = f->len - 2 * size[order[k]];
+                if (gap < 0) gap = -gap;
+                if (gap < bestgap) {
+                    bestgap = gap;
+                    best = order[k];
+                }
+            }
+            /* the subtree of best first, then the rest (tag the subtree) */
+            ntag++;
+            tag[best] = ntag;
+            for (k = 1; k < tail; k++) {
+                int32_t v = order[k];
+                if (v != best && tag[par[v]] == ntag) tag[v] = ntag;
+            }
+            head = f->start;
+            for (k = 0; k < tail; k++)
+                if (tag[order[k]] == ntag) verts[head++] = order[k];
+            for (k = 0; k < tail; k++)
+                if (tag[order[k]] != ntag) verts[head++] = order[k];
+            f->edge = pedge[best];
+            f->split = size[best];
+            f->stage = 1;
+            stack[top].start = f->start;
+            stack[top].len = f->split;
+            stack[top].stage = 0;
+            stack[top].up = top - 1;
+            stack[top].slot = 0;
+            top++;
+            continue;
+        } else if (f->stage == 1) {
+            f->stage = 2;
+            stack[top].start = f->start + f->split;
+            stack[top].len = f->len - f->split;
+            stack[top].stage = 0;
+            stack[top].up = top - 1;
+            stack[top].slot = 1;
+            top++;
+            continue;
+        } else {
+            if (merge(B, f->res[0], f->res[1], f->edge, stamp, 1) != 0) {
+                st = AQS_ENOMEM;
+                goto done;
+            }
+            res = B->nnodes - 1;
+        }
+        /* deliver the finished cluster's node to its parent frame */
+        if (f->up < 0) result = res;
+        else stack[f->up].res[f->slot] = res;
+        top--;
+    }
+    L->t.root = result;
+done:
+    lk_free(L, verts);
+    lk_free(L, tag);
+    lk_free(L, par);
+    lk_free(L, pedge);
+    lk_free(L, size);
+    lk_free(L, order);
+    lk_free(L, stamp);
+    lk_free(L, stack);
+    return st;
+}
+
 void assembly_free(aqs_linkage *L)
 {
     tree *t = &L->t;
@@ -293,7 +415,7 @@ aqs_status assembly_build(aqs_linkage *L)
     }
     B.nnodes = nvert;
     if (m->ne > 0) {
-        st = contract(&B, nvert);
+        st = L->tree_builder == AQS_TREE_BISECTION ? bisect(&B, nvert) : contract(&B, nvert);
         if (st != AQS_OK) goto fail;
     } else {
         t->nnodes = 0; /* everything is welded to the world: nothing moves */

@@ -133,6 +133,7 @@ struct aqs_linkage {
     int loads_dirty;  /* body loads changed, or positions moved (world-frame loads) */
     int gravity_dirty; /* gravity changed since the world leaf was computed */
     int lax_inertia;  /* accept inertias violating the triangle inequality */
+    int32_t tree_builder; /* AQS_TREE_* */
 
     int32_t nbodies, body_cap;
     body_def *bodies;

@@ -393,6 +393,86 @@ static void test_cap_refine_and_outputs(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* The bisection tree gives the same exact answer as the contraction tree,
+ * the bound holds on it, and its nodes carry at least as many handles. */
+static void test_tree_builders(void **state)
+{
+    tally t = {0, 0, 0, 0};
+    int c;
+    long ne[2] = {0, 0};
+    (void)state;
+    for (c = 0; c < 60; c++) {
+        uint64_t r1 = 100 + c, r2 = 100 + c;
+        spec sp = {2 + c * 3, c % 3 == 0, c % 2, 4, 0, 3.0};
+        aqs_linkage *A, *B;
+        int32_t nv, maxh[2], height[2], k;
+        double *qa, *qb;
+        /* the same linkage twice; B built by bisection (set before finalize:
+         * random_linkage finalizes, so rebuild B's tree through a copy) */
+        A = random_linkage(&r1, &sp);
+        {
+            /* rebuild the same model with the other builder */
+            aqs_linkage *src = A;
+            int32_t i, nq;
+            double *q;
+            assert_int_equal(aqs_linkage_create(&B), AQS_OK);
+            assert_int_equal(aqs_linkage_set_tree_builder(B, AQS_TREE_BISECTION), AQS_OK);
+            for (i = 0; i < src->nbodies; i++)
+                assert_int_equal(aqs_body_add(B, src->bodies[i].mass, src->bodies[i].com,
+                                              src->bodies[i].inertia, NULL), AQS_OK);
+            for (i = 0; i < src->njoints; i++) {
+                const joint_def *j = &src->joints[i];
+                assert_int_equal(aqs_joint_add(B, j->type, j->parent, j->child, j->pos, j->quat,
+                                               j->axis, NULL), AQS_OK);
+            }
+            assert_int_equal(aqs_linkage_finalize(B), AQS_OK);
+            assert_int_equal(aqs_linkage_set_tree_builder(B, AQS_TREE_CONTRACTION), AQS_ESTATE);
+            nq = src->nq;
+            q = malloc(sizeof(double) * (size_t)(nq + 1));
+            assert_int_equal(aqs_linkage_get_positions(src, q, (size_t)nq), AQS_OK);
+            assert_int_equal(aqs_linkage_set_positions(B, q, (size_t)nq), AQS_OK);
+            free(q);
+            assert_int_equal(aqs_linkage_set_gravity(B, src->gravity), AQS_OK);
+            for (i = 0; i < src->nloaded; i++) {
+                int32_t b = src->loaded_bodies[i];
+                const body_load *ld = &src->loads[b];
+                assert_int_equal(aqs_body_set_force(B, b, ld->force, ld->point, ld->torque), AQS_OK);
+            }
+            (void)r2;
+        }
+        nv = A->nv;
+        qa = malloc(sizeof(double) * (size_t)(nv + 1));
+        qb = malloc(sizeof(double) * (size_t)(nv + 1));
+        assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(B), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(A, qa, (size_t)nv), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(B, qb, (size_t)nv), AQS_OK);
+        /* two different trees, two rounding histories: 1e-10 on these
+         * well-conditioned cases (observed ~1e-13) */
+        assert_true(test_rel_diff(qb, qa, (size_t)nv) < 1e-10);
+        assert_int_equal(aqs_linkage_get_tree_stats(A, NULL, &height[0], NULL, &maxh[0]), AQS_OK);
+        assert_int_equal(aqs_linkage_get_tree_stats(B, NULL, &height[1], NULL, &maxh[1]), AQS_OK);
+        assert_true(maxh[1] >= maxh[0] || maxh[0] <= 3);
+        check_bounds(B, &t, 1e-15 * solution_norm(B));
+        for (k = 0; k < 2; k++) {
+            aqs_linkage *L = k ? B : A;
+            aqs_solve_stats st;
+            st.size = sizeof st;
+            assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -10)), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+            assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+            ne[k] += st.computed_joints;
+        }
+        free(qa);
+        free(qb);
+        aqs_linkage_destroy(A);
+        aqs_linkage_destroy(B);
+    }
+    print_message("bisection trees: %ld checks, %ld violations; N_E at rel. joint 2^-10: "
+                  "contraction %ld, bisection %ld\n", t.checks, t.violations, ne[0], ne[1]);
+    assert_int_equal(t.violations, 0);
+}
+
 /* No A(node) negative or non-finite, at the forces of the exact solve. */
 static void check_node_values(aqs_linkage *L)
 {
@@ -721,6 +801,7 @@ int main(void)
         cmocka_unit_test(test_bound_holds_random),
         cmocka_unit_test(test_joint_bound_kinds),
         cmocka_unit_test(test_cap_refine_and_outputs),
+        cmocka_unit_test(test_tree_builders),
         cmocka_unit_test(test_hard_gravity_compensated),
         cmocka_unit_test(test_hard_chain_and_mass_ratios),
         cmocka_unit_test(test_lazy_equals_eager),
