@@ -623,3 +623,29 @@ def test_solve_and_step_keep_other_behaviour():
         first = L.solve()
         raises(aqs.InvalidArgument, lambda: L.step(-1.0), "dt")
         assert L.stats() == first
+
+
+def test_tree_builders_agree():
+    """Bisection and contraction trees give the same exact answer (1e-10:
+    two rounding histories on a well-conditioned chain)."""
+    results = []
+    for builder in ("contraction", "bisection"):
+        with aqs.Linkage() as L:
+            L.set_tree_builder(builder)
+            prev = aqs.WORLD
+            for i in range(50):
+                b = L.add_body(1.0, (0.5, 0, 0), np.diag([0.01, 0.1, 0.1]))
+                L.add_joint("revolute", prev, b, pos=(1.0 if i else 0.0, 0, 0),
+                            axis=(0, i % 2, (i + 1) % 2))
+                prev = b
+            L.finalize()
+            L.set_gravity((0, -9.81, 0))
+            L.set_body_force(49, (0.3, 0.2, 1.0))
+            L.solve()
+            results.append(L.accelerations())
+            with pytest.raises(aqs.StateError):
+                L.set_tree_builder("contraction")
+    np.testing.assert_allclose(results[1], results[0], rtol=1e-10, atol=1e-12)
+    with aqs.Linkage() as L:
+        with pytest.raises(aqs.InvalidArgument):
+            L.set_tree_builder("random")

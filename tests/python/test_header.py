@@ -89,6 +89,8 @@ def test_constants_match(header):
         if name.startswith("AQS_VERSION"):
             continue
         short = name[len("AQS_"):]
+        if short.startswith("TREE_"):
+            assert aqs.TREE_BUILDERS[short[len("TREE_"):].lower()] == int(value), name
         if short.startswith("JOINT_BOUND_"):
             assert aqs.JOINT_BOUNDS[short[len("JOINT_BOUND_"):].lower()] == int(value), name
         elif short.startswith("JOINT_"):
@@ -99,7 +101,8 @@ def test_constants_match(header):
     codes = {int(v) for k, v in defines.items() if k in ("AQS_OK",) or k.startswith("AQS_E")}
     assert codes == set(_lib.STATUS_NAMES)
     assert set(aqs._errors.BY_STATUS) == codes - {0}
-    for prefix, table in (("AQS_JOINT_BOUND_", aqs.JOINT_BOUNDS), ("AQS_METRIC_", aqs.METRICS)):
+    for prefix, table in (("AQS_JOINT_BOUND_", aqs.JOINT_BOUNDS), ("AQS_METRIC_", aqs.METRICS),
+                          ("AQS_TREE_", aqs.TREE_BUILDERS)):
         assert len(table) == sum(k.startswith(prefix) for k in defines), prefix
     kinds = [k for k in defines if k.startswith("AQS_JOINT_") and "BOUND" not in k]
     assert len(aqs.JOINT_KINDS) == len(kinds)

@@ -101,7 +101,7 @@ def test_close_twice_and_context_manager():
 
 
 CALLS = [
-    ("set_inertia_check", (False,)), ("add_body", (1.0, (0, 0, 0), np.eye(3))),
+    ("set_inertia_check", (False,)), ("set_tree_builder", ("bisection",)), ("add_body", (1.0, (0, 0, 0), np.eye(3))),
     ("add_joint", ("revolute", -1, 0)),
     ("finalize", ()), ("sizes", ()), ("joint_layout", (0,)), ("tree_stats", ()),
     ("set_gravity", ((0, 0, -9.81),)), ("set_body_force", (0, (1, 0, 0))),

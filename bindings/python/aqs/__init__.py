@@ -40,8 +40,8 @@ from ._errors import (Error, InvalidArgument, ModelError, NumericError, OutOfMem
 from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOINT_CYLINDRICAL,
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
-                   JOINT_BOUND_SUM, JOINT_BOUNDS, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE,
-                   METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
+                   JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
+                   TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._errors import from_status as _from_status
 
 __all__ = [
@@ -53,6 +53,7 @@ __all__ = [
     "JOINT_UNIVERSAL", "JOINT_CYLINDRICAL", "JOINT_PLANAR", "JOINT_KINDS",
     "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
+    "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
 ]
 
 __version__ = "0.1.0"
@@ -298,6 +299,14 @@ class Linkage:
             errors="replace")
 
     # -- building --------------------------------------------------------------
+
+    def set_tree_builder(self, builder):
+        """How finalize builds the assembly tree (aqs_linkage_set_tree_builder):
+        "contraction" (default: rake and compress, handles bounded by the
+        largest body degree) or "bisection" (recursive bisection), or an
+        aqs.TREE_* constant. Building phase only."""
+        f = "aqs_linkage_set_tree_builder"
+        self._call(f, _named(builder, TREE_BUILDERS, f, "builder"))
 
     def set_inertia_check(self, physical):
         """Whether add_body requires physically realizable inertias (principal

@@ -86,6 +86,15 @@ JOINT_BOUNDS = {
     "sum": JOINT_BOUND_SUM,
 }
 
+# How finalize builds the assembly tree (AQS_TREE_*).
+TREE_CONTRACTION = 0  # rake and compress rounds (default)
+TREE_BISECTION = 1    # recursive bisection at the most balancing joint
+
+TREE_BUILDERS = {
+    "contraction": TREE_CONTRACTION,
+    "bisection": TREE_BISECTION,
+}
+
 # ---------------------------------------------------------------------------
 # C types
 # ---------------------------------------------------------------------------
@@ -172,6 +181,7 @@ PROTOTYPES = {
     "aqs_linkage_last_error": (ctypes.c_char_p, [linkage_p]),
     # Building
     "aqs_linkage_set_inertia_check": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_set_tree_builder": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_body_add": (status_t, [linkage_p, ctypes.c_double, din, din, int32_p]),
     "aqs_joint_add": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_int32, ctypes.c_int32,
                                  din, din, din_or_null, int32_p]),
