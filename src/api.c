@@ -387,7 +387,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     L->qdd = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
     L->cforce = lk_calloc(L, 6 * (size_t)L->njoints + 1, sizeof(double));
     L->q_saved = lk_calloc(L, (size_t)L->nq + 1, sizeof(double));
-    L->welded_acc = lk_calloc(L, 6 * ((size_t)L->nbodies + L->m.ncomp + 2), sizeof(double));
+    L->welded_acc = lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double));
     L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
     if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world ||
         adaptive_alloc(L) != AQS_OK) {
