@@ -611,11 +611,25 @@ static void copy_moved_positions(aqs_linkage *L, double *dst, const double *src)
     }
 }
 
+/* The positions a step moved are finite: O(N_E) after an adaptive solve. */
+static aqs_status check_moved_positions(aqs_linkage *L, const char *fn)
+{
+    const solve_state *s = &L->s;
+    int32_t i, k, n = s->all ? L->njoints : s->nprocessed;
+    for (i = 0; i < n; i++) {
+        int32_t j = s->all ? i : L->m.eff_joint[L->t.nodes[s->processed[i]].joint];
+        const joint_def *jd = &L->joints[j];
+        for (k = 0; k < joint_nq(jd->type); k++)
+            if (!isfinite(L->q[jd->qoff + k]))
+                return lk_fail(L, AQS_ENUMERIC, "%s: the position of joint %d became non-finite", fn, (int)j);
+    }
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
 {
     static const char fn[] = "aqs_linkage_step";
     aqs_status st;
-    int32_t i;
     CHECK_LINKAGE(L);
     if ((st = need_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
@@ -623,9 +637,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     if ((st = solve(L, fn)) != AQS_OK) return st;
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
-    for (i = 0; i < L->nq && st == AQS_OK; i++)
-        if (!isfinite(L->q[i]))
-            st = lk_fail(L, AQS_ENUMERIC, "%s: position value %d became non-finite", fn, (int)i);
+    st = check_moved_positions(L, fn);
     if (st == AQS_OK) st = update_coefficients(L);
     if (st != AQS_OK) {
         /* Undo: back to the positions before the step, which solved fine. */
