@@ -271,6 +271,30 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     return 0;
 }
 
+void dca_form_W(const aqs_linkage *L, int32_t n, double W[36])
+{
+    const tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const double *U = t->data + C->U, *VS = t->data + C->VS;
+    int i, j, k;
+    if (C->d == 6) {
+        memset(W, 0, 36 * sizeof(double));
+        return;
+    }
+    dense_cholesky6_inverse(t->data + C->W, W); /* V */
+    if (C->d == 1) {
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) W[6 * i + j] -= VS[i] * U[j];
+        return;
+    }
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double s = 0.0;
+            for (k = 0; k < C->d; k++) s += VS[i * C->d + k] * U[k * 6 + j];
+            W[6 * i + j] -= s;
+        }
+}
+
 void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
 {
     const tree *t = &L->t;

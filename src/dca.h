@@ -16,6 +16,8 @@ int dca_node_update(aqs_linkage *L, int32_t n);
 /* out = W h for internal node n (W = V - V S U, applied through the stored
  * Cholesky factor of T; zero for a free joint). */
 void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6]);
+/* W = V - V S U of internal node n as a 6x6 matrix (for many products). */
+void dca_form_W(const aqs_linkage *L, int32_t n, double W[36]);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces. */

@@ -278,3 +278,32 @@ int dense_qr_r(double *A, int m, int n)
         for (j = 0; j < k; j++) A[(long)k * n + j] = 0.0;
     return r;
 }
+
+int dense_qr_r_colmajor(double *A, int m, int n)
+{
+    int k, i, j, r = m < n ? m : n;
+    for (k = 0; k < r; k++) {
+        double *a = A + (long)k * m, norm = 0.0, alpha, v0, vnorm2, scale = 0.0;
+        for (i = k; i < m; i++)
+            if (fabs(a[i]) > scale) scale = fabs(a[i]);
+        if (scale == 0.0) continue; /* the column is already zero below k */
+        for (i = k; i < m; i++) norm += (a[i] / scale) * (a[i] / scale);
+        norm = scale * sqrt(norm);
+        alpha = a[k] > 0 ? -norm : norm;
+        v0 = a[k] - alpha; /* v = x - alpha e1: v0 here, the rest in place */
+        vnorm2 = v0 * v0;
+        for (i = k + 1; i < m; i++) vnorm2 += a[i] * a[i];
+        if (vnorm2 > 0.0) {
+            for (j = k + 1; j < n; j++) {
+                double *b = A + (long)j * m, sum = v0 * b[k];
+                for (i = k + 1; i < m; i++) sum += a[i] * b[i];
+                sum = 2.0 * sum / vnorm2;
+                b[k] -= sum * v0;
+                for (i = k + 1; i < m; i++) b[i] -= sum * a[i];
+            }
+        }
+        a[k] = alpha;
+        for (i = k + 1; i < m; i++) a[i] = 0.0;
+    }
+    return r;
+}

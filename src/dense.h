@@ -84,5 +84,9 @@ void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, in
  * first min(m, n) rows hold the upper-trapezoidal R (entries below the
  * diagonal zeroed); the other rows are garbage. Returns min(m, n). */
 int dense_qr_r(double *A, int m, int n);
+/* The same for a column-major A (column j at A + j m): the columns the
+ * reflections sweep are contiguous. R is left in the first min(m, n) rows
+ * (upper part of each column); entries below the diagonal are zeroed. */
+int dense_qr_r_colmajor(double *A, int m, int n);
 
 #endif

@@ -30,7 +30,8 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
         if (nd->joint >= 0) size += cols * cols;
     }
     tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
-    scratch = lk_calloc(L, (size_t)(2 * (6 * maxh + 1) + 6) * (size_t)(6 * maxh + 1), sizeof(double));
+    /* the stacked matrix, row-major, then its column-major copy */
+    scratch = lk_calloc(L, 2 * (size_t)(2 * (6 * maxh + 1) + 6) * (size_t)(6 * maxh + 1), sizeof(double));
     if (!tdata || !scratch) {
         lk_free(L, tdata);
         lk_free(L, scratch);
@@ -53,13 +54,13 @@ void totalacc_free(aqs_linkage *L)
 
 /* row (length 6nh+1) += g^T F for F = [W M^T, gamma]: block c gets
  * M_c (W g), the last entry g . gamma. */
-static void add_gF(const aqs_linkage *L, int32_t n, const double *g, const double *M,
-                   const double *gamma, int32_t nh, double *row)
+static void add_gF(const double *W, const double *g, const double *M, const double *gamma,
+                   int32_t nh, double *row)
 {
     double w[6], tmp[6];
     int32_t c, i;
     double s = 0.0;
-    dca_apply_W(L, n, g, w);
+    dense_matvec6(W, g, w);
     for (c = 0; c < nh; c++) {
         dense_matvec6(M + 36 * c, w, tmp);
         for (i = 0; i < 6; i++) row[6 * c + i] += tmp[i];
@@ -79,8 +80,11 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     const pose *J = t->poses + C->J;
     int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, rows = 0, r, i, c, kept;
-    double *S = t->tscratch;
+    double *S = t->tscratch, *Sc = t->tscratch + (int64_t)(2 * (6 * t->max_handles + 1) + 6) * (6 * t->max_handles + 1);
+    double W[36];
     int counted = jd->type != AQS_JOINT_FREE;
+
+    dca_form_W(L, n, W); /* once for all the rows: each row needs W g */
 
     /* T_A E_A */
     {
@@ -99,7 +103,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
             /* -(T_A)_k X^T F: the row g^T = (T_A)_k X^T is X applied to (T_A)_k. */
             spatial_xform_motion(J, tr + 6 * C->ka, g);
             for (i = 0; i < 6; i++) g[i] = -g[i];
-            add_gF(L, n, g, M, gamma, nh, row);
+            add_gF(W, g, M, gamma, nh, row);
         }
     }
     /* T_B E_B */
@@ -116,7 +120,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
                 c++;
             }
             row[cols - 1] += tr[cb - 1];
-            add_gF(L, n, tr + 6 * C->kb, M, gamma, nh, row);
+            add_gF(W, tr + 6 * C->kb, M, gamma, nh, row);
         }
     }
     /* K = [-U M^T, rho] */
@@ -130,8 +134,16 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
             row[cols - 1] = rho[r];
         }
     }
-    kept = rows > 0 ? dense_qr_r(S, rows, cols) : 0;
-    memcpy(t->tdata + C->T, S, sizeof(double) * (size_t)kept * (size_t)cols);
+    /* QR in column-major order (contiguous reflections), R back row-major */
+    kept = 0;
+    if (rows > 0) {
+        double *T = t->tdata + C->T;
+        for (r = 0; r < rows; r++)
+            for (c = 0; c < cols; c++) Sc[(int64_t)c * rows + r] = S[(int64_t)r * cols + c];
+        kept = dense_qr_r_colmajor(Sc, rows, cols);
+        for (r = 0; r < kept; r++)
+            for (c = 0; c < cols; c++) T[(int64_t)r * cols + c] = c < r ? 0.0 : Sc[(int64_t)c * rows + r];
+    }
     C->trows = kept;
 }
 
