@@ -139,7 +139,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    pose *J = t->poses + C->J;
+    const pose *J = t->poses + C->J;
     double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
     double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
     double *M = t->mscratch, *phi = t->data + C->phi, *bC = t->data + C->bv;
@@ -149,7 +149,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     int32_t nAo = nA - 1, i, j, ci, cj;
     double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
 
-    joint_child_pose(jd, q, J); /* X maps k's joint frame to its child frame */
+    /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
+     * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
 
     /* T = X Phi^A_kk X^T + Phi^B_kk, with A's k blocks moved into the child
@@ -246,8 +247,9 @@ int dca_node_update(aqs_linkage *L, int32_t n)
                     int r, c;
                     dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
                     for (r = 0; r < 6; r++)
-                        for (c = 0; c < 6; c++)
-                            out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + zd[r] * z[c];
+                        for (c = 0; c < 6; c++) out[6 * r + c] = zd[r] * z[c] - out[6 * r + c];
+                    if (base)
+                        for (i = 0; i < 36; i++) out[i] += base[i];
                 } else if (d < 6) {
                     int r, c, k;
                     dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);

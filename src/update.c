@@ -22,15 +22,13 @@ void update_leaf_poses(aqs_linkage *L, int32_t n)
     }
 }
 
-/* Pose of B's frame (the child frame of k) in C's frame. */
+/* Pose of B's frame (the child frame of k) in C's frame, from the stored
+ * J(q_k) (refreshed by update_node_poses whenever q_k changes). */
 static void child_frame_in_node(const aqs_linkage *L, const node *C, pose *out)
 {
     const tree *t = &L->t;
-    const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const pose *PA = t->poses + t->nodes[C->a].poses;
-    pose J;
-    joint_child_pose(jd, L->q + jd->qoff, &J);
-    pose_compose(&PA[C->ka], &J, out);
+    pose_compose(&PA[C->ka], t->poses + C->J, out);
 }
 
 void update_node_poses(aqs_linkage *L, int32_t n)
@@ -38,8 +36,10 @@ void update_node_poses(aqs_linkage *L, int32_t n)
     tree *t = &L->t;
     const node *C = &t->nodes[n], *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses;
+    const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     pose *P = t->poses + C->poses, Pk;
     int32_t i, ci = 0;
+    joint_child_pose(jd, L->q + jd->qoff, t->poses + C->J); /* J(q_k), used by dca.c too */
     child_frame_in_node(L, C, &Pk);
     for (i = 0; i < A->nh; i++)
         if (i != C->ka) P[ci++] = PA[i];

@@ -7,7 +7,9 @@
 
 /* Handle-frame poses of a leaf in its composite's frame (constant). */
 void update_leaf_poses(aqs_linkage *L, int32_t n);
-/* Cross poses of an internal node from its children and q_k. */
+/* Cross poses of an internal node from its children and q_k, and J(q_k)
+ * itself (the child frame of k in its joint frame, which dca_node_update
+ * reads): call whenever q_k or a position inside the node changes. */
 void update_node_poses(aqs_linkage *L, int32_t n);
 /* All internal nodes' cross poses, children first. O(N). */
 void update_all_poses(aqs_linkage *L);
