@@ -597,6 +597,80 @@ static int profile_run(bench *b, const options *opt)
     return 0;
 }
 
+/* N_E of the first solve at the initial state for one linkage, tolerance
+ * and joint bound. */
+static int first_ne(bench *b, aqs_linkage *L, int32_t nf, int eps_log2, int32_t bound,
+                    int32_t *ne)
+{
+    aqs_solve_stats st;
+    st.size = sizeof st;
+    if (reset(b, L, nf) != 0 ||
+        failed(aqs_linkage_set_joint_bound(L, bound), L, "aqs_linkage_set_joint_bound") ||
+        failed(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -eps_log2)), L,
+               "aqs_linkage_set_tolerance") ||
+        failed(aqs_linkage_solve(L), L, "aqs_linkage_solve") ||
+        failed(aqs_linkage_get_stats(L, &st), L, "aqs_linkage_get_stats")) {
+        return 1;
+    }
+    *ne = st.computed_joints;
+    return failed(aqs_linkage_set_joint_bound(L, AQS_JOINT_BOUND_HEAP_TOP), L,
+                  "aqs_linkage_set_joint_bound");
+}
+
+/* (d) What the heap-top bound and the tree's shape do to N_E: the first
+ * solve's N_E with the paper's sqrt(sum) bound and with the heap top, on the
+ * contraction tree and on a recursive-bisection tree of the same molecule. */
+static int shape_and_bound(bench *b, const options *opt)
+{
+    static const int eps_list[] = {10, 19};
+    aqs_linkage *bis = NULL;
+    int32_t nodes, height, maxh, c, e;
+    double meanh;
+    int rc = 1;
+    if (failed(aqs_linkage_create(&bis), NULL, "aqs_linkage_create") ||
+        failed(aqs_linkage_set_tree_builder(bis, AQS_TREE_BISECTION), bis,
+               "aqs_linkage_set_tree_builder") ||
+        failed(bench_build_molecule(bis, opt->joints, BENCH_MOLECULE_SEED), bis,
+               "bench_build_molecule") ||
+        failed(aqs_linkage_finalize(bis), bis, "aqs_linkage_finalize") ||
+        failed(aqs_linkage_get_tree_stats(bis, &nodes, &height, &meanh, &maxh), bis,
+               "aqs_linkage_get_tree_stats")) {
+        goto out;
+    }
+    printf("\n(d) N_E of the first solve (rel. joint error): joint bound and tree shape\n"
+           "contraction tree: height %d, handles mean %.2f max %d; bisection tree: height %d, "
+           "handles mean %.2f max %d\n",
+           (int)b->tree_height, b->mean_handles, (int)b->max_handles, (int)height, meanh,
+           (int)maxh);
+    printf("%6s %6s %14s %14s %16s\n", "N_f", "eps", "contr. heap", "contr. sum", "bisect. heap");
+    for (c = 0; c < 3; ++c) {
+        const int32_t nf = force_counts[c];
+        for (e = 0; e < 2; ++e) {
+            int32_t ne_top, ne_sum, ne_bis;
+            if (first_ne(b, b->adapt, nf, eps_list[e], AQS_JOINT_BOUND_HEAP_TOP, &ne_top) ||
+                first_ne(b, b->adapt, nf, eps_list[e], AQS_JOINT_BOUND_SUM, &ne_sum) ||
+                first_ne(b, bis, nf, eps_list[e], AQS_JOINT_BOUND_HEAP_TOP, &ne_bis)) {
+                goto out;
+            }
+            printf("%6d %3s-%-2d %14d %14d %16d\n", (int)nf, "2^", eps_list[e], (int)ne_top,
+                   (int)ne_sum, (int)ne_bis);
+            if (b->json != NULL) {
+                fprintf(b->json,
+                        "{\"scene\":\"molecule\",\"joints\":%d,\"forces\":%d,\"metric\":"
+                        "\"rel_joint\",\"eps\":%.17g,\"first_solve_computed_joints\":{"
+                        "\"contraction_heap_top\":%d,\"contraction_sum\":%d,"
+                        "\"bisection_heap_top\":%d},\"date\":\"%s\"}\n",
+                        (int)b->joints, (int)nf, ldexp(1.0, -eps_list[e]), (int)ne_top,
+                        (int)ne_sum, (int)ne_bis, b->stamp);
+            }
+        }
+    }
+    rc = 0;
+out:
+    aqs_linkage_destroy(bis);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     options opt;
@@ -695,6 +769,10 @@ int main(int argc, char **argv)
                 print_row(&b, nf, sweep_log2[k], &sw[i][k], exact_s[c]);
             }
         }
+    }
+
+    if (shape_and_bound(&b, &opt) != 0) {
+        goto done;
     }
 
     printf("\nsummary at eps = 2^-%d (target R <= 3):\n", TABLE_EPS_LOG2);
