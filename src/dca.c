@@ -242,7 +242,17 @@ int dca_node_update(aqs_linkage *L, int32_t n)
                     !same ? NULL
                     : ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
                                : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
-                if (d == 1) {
+                if (d == 1 && ci == cj) {
+                    /* a diagonal block is symmetric: its upper triangle only */
+                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj, *y = Y + 36 * ci;
+                    int r, c, k;
+                    for (r = 0; r < 6; r++)
+                        for (c = r; c < 6; c++) {
+                            double sum = 0.0;
+                            for (k = 0; k < 6; k++) sum += y[6 * r + k] * y[6 * c + k];
+                            out[6 * r + c] = out[6 * c + r] = zd[r] * z[c] - sum + base[6 * r + c];
+                        }
+                } else if (d == 1) {
                     const double *zd = ZD + 6 * ci, *z = Z + 6 * cj;
                     int r, c;
                     dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);

@@ -264,9 +264,12 @@ void spatial_xform_motion(const pose *P, const double v[6], double out[6])
 {
     /* [R^T w; R^T (v - p x w)], written out: this runs ~20 times per node. */
     const double *R = P->R, *p = P->p;
-    double t0 = v[3] - (p[1] * v[2] - p[2] * v[1]);
-    double t1 = v[4] - (p[2] * v[0] - p[0] * v[2]);
-    double t2 = v[5] - (p[0] * v[1] - p[1] * v[0]);
+    double t0 = v[3], t1 = v[4], t2 = v[5];
+    if (p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0) { /* rotations (revolute) skip this */
+        t0 -= p[1] * v[2] - p[2] * v[1];
+        t1 -= p[2] * v[0] - p[0] * v[2];
+        t2 -= p[0] * v[1] - p[1] * v[0];
+    }
     out[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
     out[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
     out[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
