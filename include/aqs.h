@@ -331,6 +331,9 @@ AQS_API aqs_status aqs_joint_get_computed(const aqs_linkage *linkage, int32_t jo
 
 /* ------------------------------------------------------------------------
  * Reading back and setting state
+ *
+ * An array argument whose required length is 0 (nq = 0 or nv = 0: only
+ * fixed joints) may be NULL.
  * ---------------------------------------------------------------------- */
 
 /** All joint positions in joint order. q: (n >= nq). Any phase.

@@ -770,10 +770,11 @@ AQS_API aqs_status aqs_linkage_get_positions(const aqs_linkage *cL, double *q, s
     static const char fn[] = "aqs_linkage_get_positions";
     aqs_linkage *L = (aqs_linkage *)cL;
     CHECK_LINKAGE(L);
+    if (L->nq == 0) return AQS_OK; /* nothing to read: q may be NULL */
     CHECK_PTR(L, fn, q);
     if (n < (size_t)L->nq)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
-    if (L->nq) memcpy(q, L->q, sizeof(double) * (size_t)L->nq);
+    memcpy(q, L->q, sizeof(double) * (size_t)L->nq);
     return AQS_OK;
 }
 
@@ -813,9 +814,10 @@ AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, si
     int32_t j;
     double tmp[8];
     CHECK_LINKAGE(L);
-    CHECK_PTR(L, fn, q);
     if (n != (size_t)L->nq)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
+    if (n == 0) return AQS_OK; /* nothing to set: q may be NULL */
+    CHECK_PTR(L, fn, q);
     for (j = 0; j < L->njoints; j++)
         if ((st = check_joint_position(L, fn, j, q + L->joints[j].qoff, tmp)) != AQS_OK) return st;
     for (j = 0; j < L->njoints; j++)
@@ -867,10 +869,11 @@ AQS_API aqs_status aqs_linkage_get_accelerations(const aqs_linkage *cL, double *
     aqs_status st;
     CHECK_LINKAGE(L);
     if ((st = need_solved(L, fn)) != AQS_OK) return st;
+    if (L->nv == 0) return AQS_OK; /* nothing to read: qdd may be NULL */
     CHECK_PTR(L, fn, qdd);
     if (n < (size_t)L->nv)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nv = %d", fn, n, (int)L->nv);
-    if (L->nv) memcpy(qdd, L->qdd, sizeof(double) * (size_t)L->nv);
+    memcpy(qdd, L->qdd, sizeof(double) * (size_t)L->nv);
     return AQS_OK;
 }
 

@@ -294,12 +294,88 @@ static void test_step(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* A hub welded to the world carrying many spherical pendulums (a
+ * high-degree node: more handles than any chain or binary tree has).
+ * Each pendulum is independent: alpha = I_pivot^{-1} (c x m g) with
+ * I_pivot = I_c + m(|c|^2 1 - c c^T); constraint forces are checked through
+ * S^T f = 0 and the joint order. Also an all-fixed linkage (nq = nv = 0). */
+static void test_hub_of_spherical_pendulums(void **state)
+{
+    const int32_t K = 60;
+    const double g[3] = {0.3, -0.2, -9.81};
+    aqs_linkage *L = new_linkage();
+    int32_t hub, k;
+    uint64_t rng = 7;
+    double cs[60][3], ms[60], ds[60];
+    (void)state;
+    hub = test_add_body(L, 5.0, 0, 0, 0, 1.0);
+    test_add_joint(L, AQS_JOINT_FIXED, AQS_WORLD, hub, 0, 0, 1, 0, 0, 1);
+    for (k = 0; k < K; k++) {
+        int32_t b;
+        ms[k] = test_uniform(&rng, 0.5, 2.0);
+        ds[k] = test_uniform(&rng, 0.01, 0.1);
+        cs[k][0] = test_uniform(&rng, -0.5, 0.5);
+        cs[k][1] = test_uniform(&rng, -0.5, 0.5);
+        cs[k][2] = test_uniform(&rng, -0.5, 0.5);
+        b = test_add_body(L, ms[k], cs[k][0], cs[k][1], cs[k][2], ds[k]);
+        test_add_joint(L, AQS_JOINT_SPHERICAL, hub, b, 0.1 * k, 0, 0, 0, 0, 0);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    for (k = 0; k < K; k++) {
+        const double *c = cs[k], m = ms[k];
+        double A[9], tau[3], alpha[3], det, inv[9], e[3], f[6];
+        int i, j;
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++)
+                A[3 * i + j] = (i == j ? ds[k] + m * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) : 0.0) -
+                               m * c[i] * c[j];
+        tau[0] = m * (c[1] * g[2] - c[2] * g[1]);
+        tau[1] = m * (c[2] * g[0] - c[0] * g[2]);
+        tau[2] = m * (c[0] * g[1] - c[1] * g[0]);
+        /* inverse by cofactors */
+        inv[0] = A[4] * A[8] - A[5] * A[7];
+        inv[1] = A[2] * A[7] - A[1] * A[8];
+        inv[2] = A[1] * A[5] - A[2] * A[4];
+        inv[3] = A[5] * A[6] - A[3] * A[8];
+        inv[4] = A[0] * A[8] - A[2] * A[6];
+        inv[5] = A[2] * A[3] - A[0] * A[5];
+        inv[6] = A[3] * A[7] - A[4] * A[6];
+        inv[7] = A[1] * A[6] - A[0] * A[7];
+        inv[8] = A[0] * A[4] - A[1] * A[3];
+        det = A[0] * inv[0] + A[1] * inv[3] + A[2] * inv[6];
+        for (i = 0; i < 3; i++)
+            e[i] = (inv[3 * i] * tau[0] + inv[3 * i + 1] * tau[1] + inv[3 * i + 2] * tau[2]) / det;
+        assert_int_equal(aqs_joint_get_acceleration(L, k + 1, alpha, 3), AQS_OK);
+        assert_true(test_rel_diff(alpha, e, 3) < TOL);
+        /* a spherical joint transmits no moment about its centre */
+        assert_int_equal(aqs_joint_get_constraint_force(L, k + 1, f), AQS_OK);
+        assert_true(fabs(f[0]) + fabs(f[1]) + fabs(f[2]) < TOL * m * 9.81);
+    }
+    aqs_linkage_destroy(L);
+
+    /* all joints fixed: nothing to set or read, NULL arrays accepted */
+    L = new_linkage();
+    hub = test_add_body(L, 5.0, 0, 0, 0, 1.0);
+    test_add_joint(L, AQS_JOINT_FIXED, AQS_WORLD, hub, 0, 0, 1, 0, 0, 1);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(L, NULL, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(L, NULL, 1), AQS_ESIZE);
+    assert_int_equal(aqs_linkage_get_positions(L, NULL, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, NULL, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pendulum),  cmocka_unit_test(test_slider),
         cmocka_unit_test(test_free_body_off_centre), cmocka_unit_test(test_free_fall),
         cmocka_unit_test(test_welding),   cmocka_unit_test(test_step),
+        cmocka_unit_test(test_hub_of_spherical_pendulums),
     };
     return cmocka_run_group_tests_name("dca", tests, NULL, NULL);
 }

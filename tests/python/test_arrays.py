@@ -139,3 +139,21 @@ def test_joint_kind_constants():
     assert aqs.WORLD == -1
     assert (aqs.OK, aqs.EINVAL, aqs.ERANGE, aqs.ESTATE, aqs.ENOMEM, aqs.EMODEL, aqs.ENUMERIC,
             aqs.ESIZE) == (0, -1, -2, -3, -4, -5, -6, -7)
+
+
+def test_all_fixed_linkage_has_empty_state():
+    """A linkage of fixed joints only has nq = nv = 0: empty arrays in and out."""
+    with aqs.Linkage() as L:
+        b = L.add_body(2.0, (0, 0, 0.1), np.eye(3) * 0.01)
+        L.add_joint("fixed", aqs.WORLD, b, (0, 0, 1), (1, 0, 0, 0), (0, 0, 1))
+        L.finalize()
+        L.set_gravity((0, 0, -9.81))
+        L.set_positions(np.zeros(0))
+        L.solve()
+        assert L.positions().shape == (0,)
+        assert L.accelerations().shape == (0,)
+        # the weld carries the body's weight: force m g up in the child frame
+        f = L.constraint_forces()
+        np.testing.assert_allclose(f[0, 3:], (0, 0, 2.0 * 9.81), rtol=1e-14)
+        with pytest.raises(aqs.SizeError):
+            L.set_positions(np.zeros(1))
