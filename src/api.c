@@ -602,7 +602,7 @@ static void copy_moved_positions(aqs_linkage *L, double *dst, const double *src)
     const solve_state *s = &L->s;
     int32_t i;
     if (s->all) {
-        memcpy(dst, src, sizeof(double) * (size_t)L->nq);
+        if (L->nq) memcpy(dst, src, sizeof(double) * (size_t)L->nq);
         return;
     }
     for (i = 0; i < s->nprocessed; i++) {
