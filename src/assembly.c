@@ -292,6 +292,7 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->mscratch);
     lk_free(L, t->stamp);
     lk_free(L, t->dirty);
+    lk_free(L, t->dirty_tmp);
     memset(t, 0, sizeof *t);
     t->root = -1;
 }
@@ -448,9 +449,11 @@ aqs_status assembly_build(aqs_linkage *L)
     t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
     t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
+    t->dirty_tmp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
     t->all_dirty = 1;
-    if (!t->poses || !t->data || !t->scratch || !t->mscratch || !t->stamp || !t->dirty) goto fail;
+    if (!t->poses || !t->data || !t->scratch || !t->mscratch || !t->stamp || !t->dirty ||
+        !t->dirty_tmp) goto fail;
     lk_free(L, B.uf);
     lk_free(L, B.uf_node);
     lk_free(L, cursor);

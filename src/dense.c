@@ -287,7 +287,10 @@ int dense_qr_r_colmajor(double *A, int m, int n)
         for (i = k; i < m; i++)
             if (fabs(a[i]) > scale) scale = fabs(a[i]);
         if (scale == 0.0) continue; /* the column is already zero below k */
-        for (i = k; i < m; i++) norm += (a[i] / scale) * (a[i] / scale);
+        {
+            const double inv = 1.0 / scale; /* scaled: no overflow or underflow */
+            for (i = k; i < m; i++) norm += (a[i] * inv) * (a[i] * inv);
+        }
         norm = scale * sqrt(norm);
         alpha = a[k] > 0 ? -norm : norm;
         v0 = a[k] - alpha; /* v = x - alpha e1: v0 here, the rest in place */

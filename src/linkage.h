@@ -64,6 +64,7 @@ typedef struct {
     uint32_t *stamp;
     uint32_t epoch;
     int32_t *dirty;
+    int32_t *dirty_tmp; /* scratch of the dirty-set sort, nnodes entries */
     int32_t ndirty;
     int all_dirty;
     int32_t nodes_updated; /* by the last update */

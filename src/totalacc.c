@@ -30,8 +30,8 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
         if (nd->joint >= 0) size += cols * cols;
     }
     tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
-    /* the stacked matrix, row-major, then its column-major copy */
-    scratch = lk_calloc(L, 2 * (size_t)(2 * (6 * maxh + 1) + 6) * (size_t)(6 * maxh + 1), sizeof(double));
+    /* the stacked matrix, column-major: up to 2 (6 maxh + 1) + 6 rows */
+    scratch = lk_calloc(L, (size_t)(2 * (6 * maxh + 1) + 6) * (size_t)(6 * maxh + 1), sizeof(double));
     if (!tdata || !scratch) {
         lk_free(L, tdata);
         lk_free(L, scratch);
@@ -52,10 +52,11 @@ void totalacc_free(aqs_linkage *L)
     L->t.tscratch = NULL;
 }
 
-/* row (length 6nh+1) += g^T F for F = [W M^T, gamma]: block c gets
- * M_c (W g), the last entry g . gamma. */
+/* Row r of the column-major stacked matrix (rows x (6nh+1), leading
+ * dimension ld) += g^T F for F = [W M^T, gamma]: block c gets M_c (W g),
+ * the last entry g . gamma. */
 static void add_gF(const double *W, const double *g, const double *M, const double *gamma,
-                   int32_t nh, double *row)
+                   int32_t nh, double *Sc, int64_t ld, int32_t r)
 {
     double w[6], tmp[6];
     int32_t c, i;
@@ -63,10 +64,25 @@ static void add_gF(const double *W, const double *g, const double *M, const doub
     dense_matvec6(W, g, w);
     for (c = 0; c < nh; c++) {
         dense_matvec6(M + 36 * c, w, tmp);
-        for (i = 0; i < 6; i++) row[6 * c + i] += tmp[i];
+        for (i = 0; i < 6; i++) Sc[(6 * c + i) * ld + r] += tmp[i];
     }
     for (i = 0; i < 6; i++) s += g[i] * gamma[i];
-    row[6 * nh] += s;
+    Sc[6 * nh * ld + r] += s;
+}
+
+/* Copy row tr of a child's factor (its nh_child handle blocks and the
+ * constant) into row r of the stacked matrix, skipping the joined handle
+ * k, its outer blocks going to block columns first, first+1, ... */
+static void copy_child_row(const double *tr, int32_t nh_child, int32_t k, int32_t first, int32_t cols,
+                           double *Sc, int64_t ld, int32_t r)
+{
+    int32_t i, j, c = first;
+    for (i = 0; i < nh_child; i++) {
+        if (i == k) continue;
+        for (j = 0; j < 6; j++) Sc[(6 * c + j) * ld + r] = tr[6 * i + j];
+        c++;
+    }
+    Sc[(cols - 1) * ld + r] += tr[6 * nh_child];
 }
 
 void totalacc_node_update(aqs_linkage *L, int32_t n)
@@ -79,68 +95,47 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     const double *U = t->data + C->U, *M = t->mscratch;
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     const pose *J = t->poses + C->J;
-    int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, rows = 0, r, i, c, kept;
-    double *S = t->tscratch, *Sc = t->tscratch + (int64_t)(2 * (6 * t->max_handles + 1) + 6) * (6 * t->max_handles + 1);
-    double W[36];
     int counted = jd->type != AQS_JOINT_FREE;
+    int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, r, i, c, kept;
+    int32_t rows = A->trows + B->trows + (counted ? C->d : 0), row = 0;
+    double *Sc = t->tscratch; /* the stacked matrix, column-major, leading dimension rows */
+    double W[36];
 
+    C->trows = 0;
+    if (rows == 0) return;
+    memset(Sc, 0, sizeof(double) * (size_t)rows * (size_t)cols);
     dca_form_W(L, n, W); /* once for all the rows: each row needs W g */
 
-    /* T_A E_A */
-    {
-        const double *TA = t->tdata + A->T;
-        int32_t ca = 6 * A->nh + 1;
-        for (r = 0; r < A->trows; r++, rows++) {
-            double *row = S + (int64_t)rows * cols, g[6];
-            const double *tr = TA + (int64_t)r * ca;
-            memset(row, 0, sizeof(double) * (size_t)cols);
-            for (i = 0, c = 0; i < A->nh; i++) {
-                if (i == C->ka) continue;
-                memcpy(row + 6 * c, tr + 6 * i, 6 * sizeof(double));
-                c++;
-            }
-            row[cols - 1] += tr[ca - 1];
-            /* -(T_A)_k X^T F: the row g^T = (T_A)_k X^T is X applied to (T_A)_k. */
-            spatial_xform_motion(J, tr + 6 * C->ka, g);
-            for (i = 0; i < 6; i++) g[i] = -g[i];
-            add_gF(W, g, M, gamma, nh, row);
-        }
+    /* T_A E_A; -(T_A)_k X^T F: the row g^T = (T_A)_k X^T is X applied to (T_A)_k. */
+    for (r = 0; r < A->trows; r++, row++) {
+        const double *tr = t->tdata + A->T + (int64_t)r * (6 * A->nh + 1);
+        double g[6];
+        copy_child_row(tr, A->nh, C->ka, 0, cols, Sc, rows, row);
+        spatial_xform_motion(J, tr + 6 * C->ka, g);
+        for (i = 0; i < 6; i++) g[i] = -g[i];
+        add_gF(W, g, M, gamma, nh, Sc, rows, row);
     }
     /* T_B E_B */
-    {
-        const double *TB = t->tdata + B->T;
-        int32_t cb = 6 * B->nh + 1;
-        for (r = 0; r < B->trows; r++, rows++) {
-            double *row = S + (int64_t)rows * cols;
-            const double *tr = TB + (int64_t)r * cb;
-            memset(row, 0, sizeof(double) * (size_t)cols);
-            for (i = 0, c = nAo; i < B->nh; i++) {
-                if (i == C->kb) continue;
-                memcpy(row + 6 * c, tr + 6 * i, 6 * sizeof(double));
-                c++;
-            }
-            row[cols - 1] += tr[cb - 1];
-            add_gF(W, tr + 6 * C->kb, M, gamma, nh, row);
-        }
+    for (r = 0; r < B->trows; r++, row++) {
+        const double *tr = t->tdata + B->T + (int64_t)r * (6 * B->nh + 1);
+        copy_child_row(tr, B->nh, C->kb, nAo, cols, Sc, rows, row);
+        add_gF(W, tr + 6 * C->kb, M, gamma, nh, Sc, rows, row);
     }
     /* K = [-U M^T, rho] */
     if (counted) {
-        for (r = 0; r < C->d; r++, rows++) {
-            double *row = S + (int64_t)rows * cols, tmp[6];
+        for (r = 0; r < C->d; r++, row++) {
+            double tmp[6];
             for (c = 0; c < nh; c++) {
                 dense_matvec6(M + 36 * c, U + 6 * r, tmp);
-                for (i = 0; i < 6; i++) row[6 * c + i] = -tmp[i];
+                for (i = 0; i < 6; i++) Sc[(int64_t)(6 * c + i) * rows + row] = -tmp[i];
             }
-            row[cols - 1] = rho[r];
+            Sc[(int64_t)(cols - 1) * rows + row] = rho[r];
         }
     }
     /* QR in column-major order (contiguous reflections), R back row-major */
-    kept = 0;
-    if (rows > 0) {
+    kept = dense_qr_r_colmajor(Sc, rows, cols);
+    {
         double *T = t->tdata + C->T;
-        for (r = 0; r < rows; r++)
-            for (c = 0; c < cols; c++) Sc[(int64_t)c * rows + r] = S[(int64_t)r * cols + c];
-        kept = dense_qr_r_colmajor(Sc, rows, cols);
         for (r = 0; r < kept; r++)
             for (c = 0; c < cols; c++) T[(int64_t)r * cols + c] = c < r ? 0.0 : Sc[(int64_t)c * rows + r];
     }

@@ -3,8 +3,6 @@
 
 #include <string.h>
 
-#include <stdlib.h>
-
 #include "dca.h"
 #include "dense.h"
 #include "totalacc.h"
@@ -172,10 +170,28 @@ void update_loads(aqs_linkage *L)
     L->loads_dirty = 0;
 }
 
-static int compare_int32(const void *a, const void *b)
+/* Sort node indices ascending (children before parents: a child's index
+ * is below its parent's). Insertion sort for short lists; otherwise an LSD
+ * radix sort, 8 bits a pass, as many passes as the largest node index
+ * needs: O(n) for n marked nodes, never O(N). tmp holds n entries. */
+static void sort_nodes(int32_t *a, int32_t n, int32_t max_index, int32_t *tmp)
 {
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
+    int32_t i, j, shift;
+    if (n <= 32) {
+        for (i = 1; i < n; i++) {
+            int32_t v = a[i];
+            for (j = i; j > 0 && a[j - 1] > v; j--) a[j] = a[j - 1];
+            a[j] = v;
+        }
+        return;
+    }
+    for (shift = 0; shift < 31 && (max_index >> shift) != 0; shift += 8) {
+        int32_t count[257] = {0};
+        for (i = 0; i < n; i++) count[((a[i] >> shift) & 255) + 1]++;
+        for (i = 0; i < 256; i++) count[i + 1] += count[i];
+        for (i = 0; i < n; i++) tmp[count[(a[i] >> shift) & 255]++] = a[i];
+        memcpy(a, tmp, sizeof(int32_t) * (size_t)n);
+    }
 }
 
 static aqs_status update_node(aqs_linkage *L, int32_t n)
@@ -203,7 +219,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     } else {
         update_loads(L);
         /* Children first: a child's index is below its parent's. */
-        qsort(t->dirty, (size_t)t->ndirty, sizeof(int32_t), compare_int32);
+        sort_nodes(t->dirty, t->ndirty, t->nnodes - 1, t->dirty_tmp);
         for (k = 0; k < t->ndirty && st == AQS_OK; k++) st = update_node(L, t->dirty[k]);
         t->nodes_updated = t->ndirty;
     }
