@@ -30,13 +30,13 @@ static void transpose6(const double *A, double *T)
         for (j = 0; j < 6; j++) T[6 * j + i] = A[6 * i + j];
 }
 
-/* Make block (j, i) the transpose of block (i, j) for i < j, and the
- * diagonal blocks symmetric. */
-static void symmetrize_blocks(double *phi, int32_t nh)
+/* Make block (j, i) the transpose of block (i, j) for i < j, and (when
+ * diagonal is set) the diagonal blocks symmetric. */
+static void symmetrize_blocks(double *phi, int32_t nh, int diagonal)
 {
     int32_t i, j;
     for (i = 0; i < nh; i++) {
-        dense_symmetrize(blk(phi, nh, i, i), 6);
+        if (diagonal) dense_symmetrize(blk(phi, nh, i, i), 6);
         for (j = i + 1; j < nh; j++) transpose6(blk(phi, nh, i, j), blk(phi, nh, j, i));
     }
 }
@@ -65,7 +65,7 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
             spatial_from_parent(&P[j], X);
             for (i = 0; i <= j; i++) dense_mul66_nt(Y + 36 * i, X, blk(phi, nd->nh, i, j));
         }
-        symmetrize_blocks(phi, nd->nh);
+        symmetrize_blocks(phi, nd->nh, 1);
     }
 }
 
@@ -159,9 +159,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     spatial_xform_congruence(J, cblk(phiA, nA, ka, ka), T);
     {
         const double *Bkk = cblk(phiB, nB, kb, kb);
-        for (i = 0; i < 36; i++) T[i] += Bkk[i];
+        for (i = 0; i < 36; i++) T[i] += Bkk[i]; /* both exactly symmetric: so is T */
     }
-    dense_symmetrize(T, 6);
     if (guarded_cholesky(T, Cf) != 0) return -1;
 
     /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
@@ -269,11 +268,12 @@ int dca_node_update(aqs_linkage *L, int32_t n)
                             for (k = 0; k < d; k++) sum += ZD[(6 * ci + r) * d + k] * Z[(6 * cj + c) * d + k];
                             out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + sum;
                         }
+                    if (ci == cj) dense_symmetrize(out, 6);
                 } else {
                     for (i = 0; i < 36; i++) out[i] = base ? base[i] : 0.0;
                 }
             }
-        symmetrize_blocks(phi, nh);
+        symmetrize_blocks(phi, nh, 0); /* diagonal blocks were formed symmetric */
         for (ci = 0; ci < nh; ci++) {
             const double *src = ci < nAo ? bA + 6 * child_index(ci, ka) : bB + 6 * child_index(ci - nAo, kb);
             dense_matvec6(M + 36 * ci, gamma, tmp);

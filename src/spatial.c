@@ -295,10 +295,39 @@ void spatial_xform_rows(const pose *P, const double *B, double *out)
     for (i = 0; i < 6; i++) spatial_xform_motion(P, B + 6 * i, out + 6 * i);
 }
 
+/* out = R^T S R for 3x3 blocks stored with row stride 6 (S and out point
+ * at the block's first entry); a symmetric block (sym) is formed from its
+ * upper triangle and mirrored, so it comes out exactly symmetric. */
+static void rot_congruence_block(const double *R, const double *S, double *out, int sym)
+{
+    double T[9];
+    int i, j, k;
+    for (i = 0; i < 3; i++) /* T = S R */
+        for (j = 0; j < 3; j++) T[3 * i + j] = S[6 * i] * R[j] + S[6 * i + 1] * R[3 + j] + S[6 * i + 2] * R[6 + j];
+    for (i = 0; i < 3; i++)
+        for (j = sym ? i : 0; j < 3; j++) {
+            double v = 0.0;
+            for (k = 0; k < 3; k++) v += R[3 * k + i] * T[3 * k + j];
+            out[6 * i + j] = v;
+            if (sym) out[6 * j + i] = v;
+        }
+}
+
 void spatial_xform_congruence(const pose *P, const double *S, double *out)
 {
     double Y[36], YT[36];
     int i, j;
+    if (P->p[0] == 0.0 && P->p[1] == 0.0 && P->p[2] == 0.0) {
+        /* A pure rotation (every revolute J(q)): X = diag(R^T, R^T), so
+         * X S X^T is R^T S_ab R blockwise; the lower-left block is the
+         * transpose of the upper-right one. */
+        rot_congruence_block(P->R, S, out, 1);
+        rot_congruence_block(P->R, S + 3, out + 3, 0);
+        rot_congruence_block(P->R, S + 21, out + 21, 1);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) out[6 * (3 + j) + i] = out[6 * i + 3 + j];
+        return;
+    }
     spatial_xform_rows(P, S, Y); /* Y = S X^T */
     for (i = 0; i < 6; i++)
         for (j = 0; j < 6; j++) YT[6 * j + i] = Y[6 * i + j];

@@ -461,6 +461,22 @@ static void test_spatial_transforms(void **state)
             mul6(Xi, S, T1);
             mul6(T1, XiT, T2);
             assert_close(outB, T2, 36);
+            /* a pure rotation takes the blockwise path: X = diag(R^T, R^T) */
+            {
+                pose Pr = P;
+                double Xr[36] = {0}, XrT[36];
+                int a, b;
+                Pr.p[0] = Pr.p[1] = Pr.p[2] = 0.0;
+                for (a = 0; a < 3; a++)
+                    for (b = 0; b < 3; b++) Xr[6 * a + b] = Xr[6 * (a + 3) + b + 3] = P.R[3 * b + a];
+                spatial_xform_congruence(&Pr, S, outB);
+                transpose6(Xr, XrT);
+                mul6(Xr, S, T1);
+                mul6(T1, XrT, T2);
+                assert_close(outB, T2, 36);
+                for (a = 0; a < 6; a++) /* exactly symmetric */
+                    for (b = 0; b < 6; b++) assert_true(outB[6 * a + b] == outB[6 * b + a]);
+            }
         }
     }
 }
