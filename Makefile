@@ -143,18 +143,19 @@ $(AQS_BENCH): $(BUILD)/bench/aqs_bench
 # Each run overwrites its docs/bench/<set>-<scene>.jsonl (every line has a run_id).
 ifeq ($(FULL),1)
 BENCH_SET := full
-BENCH_CHAIN30 := --steps 10000 --eps 2^-0..19 --tip-every 10
-BENCH_MILLIPEDE := --steps 4000 --eps 2^-0..19
-BENCH_MOLECULE := --steps 4000 --eps 2^-0..19 --forces 1,10,100,1000
+FULL_FORCES ?= 1,10,100,1000
+BENCH_CHAIN30 := --steps 10000 --eps 2^-0..19 --tip-every 20 --exact-every 100
+BENCH_MILLIPEDE := --steps 4000 --eps 2^-0..19 --exact-every 100
+BENCH_MOLECULE := --steps 4000 --eps 2^-0..19 --forces $(FULL_FORCES) --exact-every 100
 else
 BENCH_SET := quick
-BENCH_CHAIN30 := --steps 1000 --eps 2^-1,2^-3,2^-5,2^-7,2^-10,2^-19 --tip-every 5
+BENCH_CHAIN30 := --steps 2000 --eps 2^-1,2^-3,2^-5,2^-7,2^-10,2^-19 --tip-every 10
 BENCH_MILLIPEDE := --steps 100 --eps 2^-0..19
 BENCH_MOLECULE := --steps 30 --eps 2^-0,2^-5,2^-10,2^-15,2^-19 --forces 1,10,100,1000
 endif
 bench: $(AQS_BENCH)
 	@mkdir -p docs/bench
-	$(AQS_BENCH) --scene chain30 --first-move 1e-2 $(BENCH_CHAIN30) \
+	$(AQS_BENCH) --scene chain30 --first-move 0.1 $(BENCH_CHAIN30) \
 	    --out docs/bench/$(BENCH_SET)-chain30.jsonl --tip-path docs/bench/$(BENCH_SET)-chain30-tip.csv
 	$(AQS_BENCH) --scene millipede $(BENCH_MILLIPEDE) --out docs/bench/$(BENCH_SET)-millipede.jsonl
 	$(AQS_BENCH) --scene molecule --joints 50000 $(BENCH_MOLECULE) \
@@ -171,7 +172,11 @@ bench-scaling: $(AQS_BENCH)
 	        --out docs/bench/scaling.jsonl --append; done
 	@$(MAKE) --no-print-directory bench-plots BENCH_SET=$(or $(BENCH_SET),quick)
 
-bench-plots: $(DEPS_STAMP)
+BENCH_DEPS_STAMP := build/.deps-bench-ok
+$(BENCH_DEPS_STAMP): tools/deps.sh $(DEPS_STAMP)
+	@bash tools/deps.sh bench
+	@mkdir -p build && touch $@
+bench-plots: $(BENCH_DEPS_STAMP)
 	$(PYTHON) bench/plot.py --set $(or $(BENCH_SET),quick) docs/bench
 
 # aqs-bench on a tiny molecule: JSON Lines schema and consistency (no timing asserted).
