@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots of aqs-bench results (docs/bench.md shows them).
 
-usage: bench/plot.py [--set quick|full] [DIR]   (DIR default docs/bench)
+usage: bench/plot.py [--set quick|full] [--tables] [DIR]   (DIR default docs/bench)
 
 Reads DIR/<set>-molecule.jsonl, DIR/<set>-millipede.jsonl, DIR/<set>-chain30.jsonl,
 DIR/<set>-chain30-tip.csv and DIR/scaling.jsonl (whichever exist) and writes PNGs into DIR:
@@ -11,7 +11,7 @@ DIR/<set>-chain30-tip.csv and DIR/scaling.jsonl (whichever exist) and writes PNG
   <set>-fig1-chain30.png        chain30 tip trajectories for several eps against exact (Fig. 1)
   scaling.png                   molecule 10k..1M joints, log-log
 Within a file only the lines of its latest run_id are used (scaling.jsonl: the latest line
-of each size).
+of each size). --tables prints the results as Markdown tables instead.
 """
 import argparse
 import csv
@@ -113,29 +113,41 @@ def displacement(sets, out):
 
 
 def tip_paths(path, out):
+    """Left: the tip's path per eps and exact; right: its distance from the exact tip."""
     if not os.path.exists(path):
         return False
     paths = defaultdict(list)
     with open(path) as f:
         for r in csv.DictReader(f):
             key = "exact" if r["run"] == "exact" else float(r["eps"])
-            paths[key].append((float(r["x"]), float(r["y"])))
+            paths[key].append((int(r["step"]), float(r["x"]), float(r["y"])))
     if "exact" not in paths:
         return False
-    fig, ax = plt.subplots(figsize=(6.5, 5))
+    exact = {s: (x, y) for s, x, y in paths["exact"]}
+    fig, (ax, ax_d) = plt.subplots(1, 2, figsize=(11, 4.6))
     for key in sorted((k for k in paths if k != "exact"), reverse=True):
-        x, y = zip(*paths[key])
-        i = round(-math.log2(key))
-        ax.plot(x, y, lw=1, label=f"eps = 2^-{i}")
-    x, y = zip(*paths["exact"])
+        _, x, y = zip(*paths[key])
+        label = f"eps = 2^-{round(-math.log2(key))}"
+        line, = ax.plot(x, y, lw=1, label=label)
+        dist = [(s, math.hypot(px - exact[s][0], py - exact[s][1]))
+                for s, px, py in paths[key] if s in exact and s > 0]
+        dist = [(s, d) for s, d in dist if d > 0]
+        if dist:
+            ax_d.semilogy(*zip(*dist), lw=1, color=line.get_color(), label=label)
+    _, x, y = zip(*paths["exact"])
     ax.plot(x, y, "k--", lw=1.5, label="exact")
     ax.plot([x[0]], [y[0]], "ko", ms=4)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title("chain30: path of the tip, constant (0, 1, 0) N at the tip")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.set_title("path of the tip, (0, 1, 0) N at the tip")
+    ax_d.set_xlabel("step")
+    ax_d.set_ylabel("|tip(eps) - tip(exact)| (m)")
+    ax_d.set_title("distance from the exact tip")
+    for a in (ax, ax_d):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle("chain30 (paper Figure 1)")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)
@@ -179,15 +191,58 @@ def scaling(path, out):
     return True
 
 
+def tables(sets, scaling_path):
+    """Markdown tables of the results (for docs/bench.md) on stdout."""
+    for label, rows in sets:
+        if not rows:
+            continue
+        r0 = rows[0]
+        print(f"\n{label}: {r0['joints']:,} joints, run {r0['run_id']}, {r0['steps']} steps, "
+              f"load average {min(r['loadavg1'] for r in rows):.2f}-"
+              f"{max(r['loadavg1'] for r in rows):.2f}\n")
+        print("| N_f | eps | ms/step | exact ms/step | speedup | N_E | nodes updated | R "
+              "| displ. error | max bound |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        for nf, g in by_forces(rows).items():
+            for r in g:
+                print(f"| {nf} | 2^-{r['eps_log2']} | {r['ms_per_step']:.3g} | "
+                      f"{r['exact_ms_per_step']:.4g} | {r['speedup']:.3g} | "
+                      f"{r['computed_joints']:,.1f} | {r['nodes_updated']:,.1f} | "
+                      f"{r['ratio_R']:.2f} | {r['displacement_error']:.2g} | "
+                      f"{r['max_error_bound']:.2g} |")
+    rows = load_jsonl(scaling_path, latest_run=False)
+    latest = {r["joints"]: r for r in rows}
+    if latest:
+        print("\nscaling\n")
+        print("| joints | tree height | finalize s | exact ms/step (interleaved / ref. run) "
+              "| adaptive ms/step | N_E | R | exact B/joint | adaptive B/joint "
+              "| peak RSS B/joint | load |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        for n in sorted(latest):
+            r = latest[n]
+            print(f"| {n:,} | {r['tree_height']} | {r['finalize_s']:.2f} | "
+                  f"{r['exact_ms_per_step']:.4g} / {r['exact_ref_ms_per_step']:.4g} | "
+                  f"{r['ms_per_step']:.3g} | {r['computed_joints']:.1f} | "
+                  f"{r['ratio_R']:.2f} | {r['exact_linkage_bytes'] / n:,.0f} | "
+                  f"{r['adaptive_linkage_bytes'] / n:,.0f} | {r['peak_rss_bytes'] / n:,.0f} | "
+                  f"{r['loadavg1']:.2f} |")
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", default="quick", choices=["quick", "full"])
+    ap.add_argument("--tables", action="store_true",
+                    help="print Markdown tables of the results instead of plotting")
     ap.add_argument("dir", nargs="?", default="docs/bench")
     a = ap.parse_args(argv)
     d, s = a.dir, a.set
     molecule = load_jsonl(os.path.join(d, f"{s}-molecule.jsonl"))
     millipede = load_jsonl(os.path.join(d, f"{s}-millipede.jsonl"))
     chain30 = load_jsonl(os.path.join(d, f"{s}-chain30.jsonl"))
+    if a.tables:
+        tables([("chain30", chain30), ("millipede", millipede), ("molecule", molecule)],
+               os.path.join(d, "scaling.jsonl"))
+        return 0
     made = []
     jobs = [
         (f"{s}-fig5-millipede.png", lambda o: time_and_joints(
