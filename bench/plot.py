@@ -125,10 +125,14 @@ def tip_paths(path, out):
         return False
     exact = {s: (x, y) for s, x, y in paths["exact"]}
     fig, (ax, ax_d) = plt.subplots(1, 2, figsize=(11, 4.6))
-    for key in sorted((k for k in paths if k != "exact"), reverse=True):
+    shown = sorted((k for k in paths if k != "exact"), reverse=True)
+    if len(shown) > 8:  # a readable subset: 2^-0, 2^-1, 2^-3, 2^-5, 2^-7, 2^-10, 2^-15, 2^-19
+        shown = [k for k in shown if round(-math.log2(k)) in (0, 1, 3, 5, 7, 10, 15, 19)]
+    colors = plt.cm.viridis([i / max(1, len(shown) - 1) for i in range(len(shown))])
+    for key, color in zip(shown, colors):
         _, x, y = zip(*paths[key])
         label = f"eps = 2^-{round(-math.log2(key))}"
-        line, = ax.plot(x, y, lw=1, label=label)
+        line, = ax.plot(x, y, lw=1, color=color, label=label)
         dist = [(s, math.hypot(px - exact[s][0], py - exact[s][1]))
                 for s, px, py in paths[key] if s in exact and s > 0]
         dist = [(s, d) for s, d in dist if d > 0]
