@@ -363,16 +363,12 @@ static int parse_options(int argc, char **argv, bench_options *o)
             }
             break;
         case OPT_OUT:
-            o->out = val;
+        case OPT_TIP_PATH:
+            *(id == OPT_OUT ? &o->out : &o->tip_path) = val;
             break;
         case OPT_APPEND:
-            o->append = 1;
-            break;
-        case OPT_TIP_PATH:
-            o->tip_path = val;
-            break;
         case OPT_QUIET:
-            o->quiet = 1;
+            *(id == OPT_APPEND ? &o->append : &o->quiet) = 1;
             break;
         default:
             usage(stdout);

@@ -54,6 +54,17 @@ def by_forces(rows):
     return dict(sorted(groups.items()))
 
 
+def finish(fig, axes, out):
+    """Grid and legend on each of axes, then write the figure to out."""
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return True
+
+
 def time_and_joints(rows, title, out):
     """Time per step (adaptive, with the exact time dashed) and N_E against eps."""
     groups = by_forces(rows)
@@ -76,15 +87,8 @@ def time_and_joints(rows, title, out):
     ax_n.set_xlabel("i  (eps = 2^-i)")
     ax_n.set_ylabel("computed joints N_E (mean per step)")
     ax_n.set_title("computed joint accelerations")
-    for ax in (ax_t, ax_n):
-        ax.grid(True, which="both", alpha=0.3)
-    ax_t.legend(fontsize=7)
-    ax_n.legend(fontsize=7)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return True
+    return finish(fig, (ax_t, ax_n), out)
 
 
 def displacement(sets, out):
@@ -104,12 +108,7 @@ def displacement(sets, out):
     ax.set_xlabel("i  (eps = 2^-i)")
     ax.set_ylabel("max_i |d_i - d_i^exact| / max_i |d_i^exact|")
     ax.set_title("relative displacement error of the centres of mass")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return True
+    return finish(fig, (ax,), out)
 
 
 def tip_paths(path, out):
@@ -148,14 +147,8 @@ def tip_paths(path, out):
     ax_d.set_xlabel("step")
     ax_d.set_ylabel("|tip(eps) - tip(exact)| (m)")
     ax_d.set_title("distance from the exact tip")
-    for a in (ax, ax_d):
-        a.grid(True, which="both", alpha=0.3)
-        a.legend(fontsize=7)
     fig.suptitle("chain30 (paper Figure 1)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return True
+    return finish(fig, (ax, ax_d), out)
 
 
 def scaling(path, out):
@@ -186,13 +179,7 @@ def scaling(path, out):
     ax_m.set_ylabel("resident bytes per joint")
     ax_m.set_title("memory per joint")
     ax_m.set_ylim(bottom=0)
-    for ax in (ax_t, ax_m):
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return True
+    return finish(fig, (ax_t, ax_m), out)
 
 
 def tables(sets, scaling_path):
