@@ -2,7 +2,8 @@
 #   make            build/libaqs.so.X.Y.Z and build/libaqs.a
 #   make check      every test (C, C++ reference, Python, install); SANITIZE=1 under ASan/UBSan
 #   make demo       the README's "run it" command
-#   make bench      the benchmark sweep (results in docs/bench/)
+#   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
+#   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
 #   make install    PREFIX=/usr/local DESTDIR=
 #   make deps       install the Debian/PyPI packages that are missing
 
@@ -46,11 +47,11 @@ C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.
 CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
-BENCH_MAINS := bench/demo.c bench/exact_bench.c bench/adaptive_bench.c bench/aqs_bench.c
+BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c bench/collide_bench.c)
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
-        deps demo bench install clean
+        deps demo bench bench-scaling bench-plots check-bench install clean
 
 all: lib
 lib: $(SHLIB) $(STLIB)
@@ -89,7 +90,7 @@ $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.h
 	@echo "  CXX     $<"
 	@$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-c check-reference check-python check-install
+check: check-symbols check-c check-reference check-python check-install check-bench
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
 
 check-symbols: $(SHLIB)
@@ -128,15 +129,60 @@ install: lib
 $(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) -std=c99 -O2 -g $(WARN) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+	@$(CC) -std=c99 -O2 -g $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
 
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo
 
-bench: $(BUILD)/bench/exact_bench $(if $(wildcard bench/adaptive_bench.c),$(BUILD)/bench/adaptive_bench)
+# aqs-bench: the one benchmark program (bench/README.md).
+AQS_BENCH := $(BUILD)/bench/aqs-bench
+$(AQS_BENCH): $(BUILD)/bench/aqs_bench
+	@cp $< $@
+
+# make bench: quick sweep (~3 min on 2 cores); FULL=1: the paper's protocol.
+# Each run overwrites its docs/bench/<set>-<scene>.jsonl (every line has a run_id).
+ifeq ($(FULL),1)
+BENCH_SET := full
+FULL_FORCES ?= 1,10,100,1000
+BENCH_CHAIN30 := --steps 10000 --eps 2^-0..19 --tip-every 20 --exact-every 100
+BENCH_MILLIPEDE := --steps 4000 --eps 2^-0..19 --exact-every 100
+BENCH_MOLECULE := --steps 4000 --eps 2^-0..19 --forces $(FULL_FORCES) --exact-every 100
+else
+BENCH_SET := quick
+BENCH_CHAIN30 := --steps 2000 --eps 2^-1,2^-3,2^-5,2^-7,2^-10,2^-19 --tip-every 10
+BENCH_MILLIPEDE := --steps 100 --eps 2^-0..19
+BENCH_MOLECULE := --steps 30 --eps 2^-0,2^-5,2^-10,2^-15,2^-19 --forces 1,10,100,1000
+endif
+bench: $(AQS_BENCH)
 	@mkdir -p docs/bench
-	$(BUILD)/bench/exact_bench
-	$(if $(wildcard bench/adaptive_bench.c),$(BUILD)/bench/adaptive_bench)
+	$(AQS_BENCH) --scene chain30 --first-move 0.1 $(BENCH_CHAIN30) \
+	    --out docs/bench/$(BENCH_SET)-chain30.jsonl --tip-path docs/bench/$(BENCH_SET)-chain30-tip.csv
+	$(AQS_BENCH) --scene millipede $(BENCH_MILLIPEDE) --out docs/bench/$(BENCH_SET)-millipede.jsonl
+	$(AQS_BENCH) --scene molecule --joints 50000 $(BENCH_MOLECULE) \
+	    --out docs/bench/$(BENCH_SET)-molecule.jsonl
+	@$(MAKE) --no-print-directory bench-plots BENCH_SET=$(BENCH_SET)
+
+# Scaling: molecule 10k..1M joints, N_f = 1, rel. joint 2^-19 (1M: ~12 GB, ~3 min).
+SCALING_SIZES ?= 10000 50000 200000 1000000
+bench-scaling: $(AQS_BENCH)
+	@mkdir -p docs/bench
+	@rm -f docs/bench/scaling.jsonl
+	@set -e; for n in $(SCALING_SIZES); do \
+	    $(AQS_BENCH) --scene molecule --joints $$n --forces 1 --eps 2^-19 --steps 20 \
+	        --out docs/bench/scaling.jsonl --append; done
+	@$(MAKE) --no-print-directory bench-plots BENCH_SET=$(or $(BENCH_SET),quick)
+
+BENCH_DEPS_STAMP := build/.deps-bench-ok
+$(BENCH_DEPS_STAMP): tools/deps.sh $(DEPS_STAMP)
+	@bash tools/deps.sh bench
+	@mkdir -p build && touch $@
+bench-plots: $(BENCH_DEPS_STAMP)
+	$(PYTHON) bench/plot.py --set $(or $(BENCH_SET),quick) docs/bench
+
+# aqs-bench on a tiny molecule: JSON Lines schema and consistency (no timing asserted).
+check-bench: $(AQS_BENCH)
+	AQS_BENCH=$(abspath $(AQS_BENCH)) $(PYTHON) -m pytest -q -p no:cacheprovider \
+	    tests/bench/test_aqs_bench.py
 
 clean:
 	rm -rf build

@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define BENCH_PI 3.14159265358979323846
 
@@ -502,4 +503,76 @@ aqs_status bench_build_millipede(aqs_linkage *linkage)
         }
     }
     return st;
+}
+
+/* ------------------------------------------------------------------------
+ * The scenes by name
+ * ---------------------------------------------------------------------- */
+
+static const char *const scene_names[BENCH_SCENE_COUNT] = {"chain30", "chain", "molecule",
+                                                           "millipede"};
+
+const char *bench_scene_name(bench_scene_kind kind)
+{
+    return ((int)kind >= 0 && kind < BENCH_SCENE_COUNT) ? scene_names[kind] : NULL;
+}
+
+int bench_scene_from_name(const char *name)
+{
+    int k;
+    for (k = 0; k < BENCH_SCENE_COUNT && name != NULL; ++k) {
+        if (strcmp(name, scene_names[k]) == 0) {
+            return k;
+        }
+    }
+    return -1;
+}
+
+int bench_scene_has_size(bench_scene_kind kind)
+{
+    return kind == BENCH_SCENE_CHAIN || kind == BENCH_SCENE_MOLECULE;
+}
+
+int32_t bench_scene_default_size(bench_scene_kind kind)
+{
+    switch (kind) {
+    case BENCH_SCENE_CHAIN30:
+        return BENCH_CHAIN30_LINKS;
+    case BENCH_SCENE_MILLIPEDE:
+        return BENCH_MILLIPEDE_LINKS;
+    default:
+        return 50000;
+    }
+}
+
+aqs_status bench_build_scene(aqs_linkage *linkage, bench_scene_kind kind, int32_t size)
+{
+    switch (kind) {
+    case BENCH_SCENE_CHAIN30:
+        return bench_build_chain30(linkage);
+    case BENCH_SCENE_CHAIN:
+        return bench_build_chain(linkage, size);
+    case BENCH_SCENE_MOLECULE:
+        return bench_build_molecule(linkage, size, BENCH_MOLECULE_SEED);
+    case BENCH_SCENE_MILLIPEDE:
+        return bench_build_millipede(linkage);
+    default:
+        return AQS_EINVAL;
+    }
+}
+
+void bench_scene_body_com(bench_scene_kind kind, int32_t body, double com[3])
+{
+    com[1] = com[2] = 0.0;
+    switch (kind) {
+    case BENCH_SCENE_MOLECULE:
+        com[0] = 0.0;
+        break;
+    case BENCH_SCENE_MILLIPEDE:
+        com[0] = body < BENCH_MILLIPEDE_SPINE ? 0.5 : 0.5 * BENCH_MILLIPEDE_LEG_LINK_LENGTH;
+        break;
+    default:
+        com[0] = 0.5 * BENCH_CHAIN30_LINK_LENGTH; /* chain30 and chain: unit links */
+        break;
+    }
 }

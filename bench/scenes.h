@@ -115,4 +115,37 @@ aqs_status bench_build_millipede(aqs_linkage *linkage);
 /** Body index of link k (0 = at the spine, 9 = the foot) of leg l. */
 int32_t bench_millipede_leg_body(int32_t leg, int32_t link);
 
+/* ------------------------------------------------------------------------
+ * The scenes by name (aqs-bench, and anything that takes a scene argument)
+ * ---------------------------------------------------------------------- */
+
+typedef enum bench_scene_kind {
+    BENCH_SCENE_CHAIN30 = 0,
+    BENCH_SCENE_CHAIN = 1,
+    BENCH_SCENE_MOLECULE = 2,
+    BENCH_SCENE_MILLIPEDE = 3,
+    BENCH_SCENE_COUNT = 4
+} bench_scene_kind;
+
+/** "chain30", "chain", "molecule", "millipede"; NULL for an unknown kind. */
+const char *bench_scene_name(bench_scene_kind kind);
+
+/** The kind named name; -1 if there is none. */
+int bench_scene_from_name(const char *name);
+
+/** 1 if the scene's size is a parameter (chain, molecule), else 0. */
+int bench_scene_has_size(bench_scene_kind kind);
+
+/** Default size: joints of chain (50,000) and molecule (50,000); the fixed
+ *  joint count of chain30 (30) and millipede (13,000). */
+int32_t bench_scene_default_size(bench_scene_kind kind);
+
+/** Build scene kind into an empty linkage; size is used by the sized scenes
+ *  only; the molecule uses BENCH_MOLECULE_SEED, the chain BENCH_CHAIN_SEED. */
+aqs_status bench_build_scene(aqs_linkage *linkage, bench_scene_kind kind, int32_t size);
+
+/** Centre of mass of body (body frame) in scene kind: the middle of a rod
+ *  or link, the atom itself in the molecule. */
+void bench_scene_body_com(bench_scene_kind kind, int32_t body, double com[3]);
+
 #endif /* BENCH_SCENES_H */

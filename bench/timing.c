@@ -7,7 +7,9 @@
 
 #include <stdlib.h>
 #include <sys/resource.h>
+#include <stdio.h>
 #include <time.h>
+#include <unistd.h>
 
 double bench_now(void)
 {
@@ -51,4 +53,17 @@ void bench_utc_stamp(char *buf, size_t size)
     if (gmtime_r(&now, &utc) != NULL) {
         strftime(buf, size, "%Y-%m-%dT%H:%M:%SZ", &utc);
     }
+}
+
+long bench_current_rss_bytes(void)
+{
+    long pages_total = 0, pages_resident = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    int n;
+    if (f == NULL) {
+        return -1;
+    }
+    n = fscanf(f, "%ld %ld", &pages_total, &pages_resident);
+    fclose(f);
+    return n == 2 ? pages_resident * sysconf(_SC_PAGESIZE) : -1;
 }

@@ -16,6 +16,9 @@ double bench_median(double *x, size_t n);
 /** Peak resident set size of this process so far, kB (getrusage); -1 if unknown. */
 long bench_peak_rss_kb(void);
 
+/** Resident set size of this process now, bytes (/proc/self/statm); -1 if unknown. */
+long bench_current_rss_bytes(void);
+
 /** Current UTC time as "YYYY-MM-DDTHH:MM:SSZ" into buf (size >= 21). */
 void bench_utc_stamp(char *buf, size_t size);
 

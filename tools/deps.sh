@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Install what is missing of the project's dependencies (Debian packages, PyPI).
+# `tools/deps.sh bench` also installs the benchmark plots' dependency (matplotlib;
+# `make bench-plots` / `make bench` call it so).
 set -euo pipefail
 pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config)
 missing=()
@@ -22,6 +24,9 @@ $PY -c "import pytest" 2>/dev/null || pymissing+=(pytest)
 # needs the build backend locally: setuptools, and wheel for setuptools < 70.1.
 $PY -c "import setuptools" 2>/dev/null || pymissing+=(setuptools)
 $PY -c "import wheel" 2>/dev/null || pymissing+=(wheel)
+if [ "${1:-}" = bench ]; then
+    $PY -c "import matplotlib" 2>/dev/null || pymissing+=(matplotlib)
+fi
 if [ ${#pymissing[@]} -gt 0 ]; then
     echo "deps: pip installing ${pymissing[*]}"
     $PY -m pip install -q "${pymissing[@]}"

@@ -1,0 +1,127 @@
+"""aqs-bench on a tiny molecule: the JSON Lines schema and its internal consistency.
+
+No timing value is asserted (the machine is shared); only the structure of the
+output, identities between its fields, and facts that hold whatever the speed.
+Run by `make check-bench` (part of `make check`) with AQS_BENCH set to the program.
+"""
+import csv
+import json
+import math
+import os
+import subprocess
+
+import pytest
+
+BENCH = os.environ.get("AQS_BENCH", "build/bench/aqs-bench")
+
+REQUIRED = {
+    "run_id": str, "time": str, "version": str, "scene": str, "joints": int, "bodies": int,
+    "tree_nodes": int, "tree_height": int, "handles_mean": float, "handles_max": int,
+    "forces": int, "force_seed": int, "metric": str, "eps": (int, float),
+    "steps": int, "repeats": int, "ms_per_step": float, "exact_ms_per_step": float,
+    "exact_ref_ms_per_step": float, "speedup": float, "computed_joints": float,
+    "nodes_updated": float, "nodes_processed": float, "displacement_error": (int, float),
+    "max_error_bound": (int, float), "ratio_R": float, "peak_rss_bytes": int,
+    "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
+}
+
+
+def run(*args, check=True):
+    return subprocess.run([BENCH, *args], capture_output=True, text=True, check=check,
+                          timeout=120)
+
+
+@pytest.fixture(scope="module")
+def lines(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench") / "tiny.jsonl"
+    res = run("--scene", "molecule", "--joints", "500", "--steps", "3", "--eps", "0,2^-10",
+              "--forces", "1,10", "--repeats", "2", "--out", str(out))
+    assert "assembly tree:" in res.stdout and "handles per node" in res.stdout
+    with open(out) as f:
+        return [json.loads(line) for line in f]
+
+
+def test_one_object_per_configuration(lines):
+    assert [(d["forces"], d["eps"]) for d in lines] == [
+        (1, 0), (1, 2.0 ** -10), (10, 0), (10, 2.0 ** -10)]
+    assert len({d["run_id"] for d in lines}) == 1
+
+
+def test_schema(lines):
+    for d in lines:
+        for key, typ in REQUIRED.items():
+            assert key in d, key
+            assert isinstance(d[key], typ), (key, d[key])
+        assert d["scene"] == "molecule" and d["metric"] == "rel_joint"
+        assert d["joints"] == 500 and d["bodies"] == 500
+        assert d["steps"] == 3 and d["repeats"] == 2
+        assert d["tree_nodes"] == 2 * d["joints"] + 1
+        assert d["tree_height"] >= math.log2(d["joints"])
+        assert 1 <= d["handles_mean"] <= d["handles_max"]
+        assert d["eps_log2"] == (10 if d["eps"] > 0 else None)
+
+
+def test_consistency(lines):
+    for d in lines:
+        assert d["ms_per_step"] > 0 and d["exact_ms_per_step"] > 0
+        assert d["speedup"] == pytest.approx(d["exact_ms_per_step"] / d["ms_per_step"],
+                                             rel=1e-6)
+        assert d["exact_us_per_node"] == pytest.approx(
+            1e3 * d["exact_ms_per_step"] / d["tree_nodes"], rel=1e-6)
+        log2n = math.log2(d["joints"])
+        t_node = d["exact_ms_per_step"] / d["tree_nodes"]
+        assert d["ratio_R"] == pytest.approx(
+            d["ms_per_step"] / ((d["computed_joints"] + d["forces"] * log2n) * t_node), rel=1e-6)
+        assert 0 < d["computed_joints"] <= d["max_computed_joints"] <= d["joints"]
+        assert d["nodes_processed"] <= d["tree_nodes"]
+        assert d["peak_rss_bytes"] > 0
+        assert d["displacement_error"] >= 0 and d["max_displacement"] > 0
+
+
+def test_exact_configuration(lines):
+    for d in (d for d in lines if d["eps"] == 0):
+        # eps = 0: every joint computed, the same trajectory as the exact run.
+        assert d["displacement_error"] == 0
+        assert d["computed_joints"] == d["joints"]
+        assert d["max_error_bound"] == 0
+
+
+def test_adaptive_configuration(lines):
+    for d in (d for d in lines if d["eps"] > 0):
+        # the certified bound of every step is within eps, and fewer joints are
+        # computed than in the exact run
+        assert d["max_error_bound"] <= d["eps"]
+        assert d["computed_joints"] < d["joints"]
+
+
+def test_tip_path(tmp_path):
+    tip = tmp_path / "tip.csv"
+    run("--scene", "chain30", "--steps", "4", "--eps", "2^-5", "--tip-path", str(tip),
+        "--quiet")
+    with open(tip) as f:
+        rows = list(csv.DictReader(f))
+    assert [r["run"] for r in rows] == ["exact"] * 5 + ["adaptive"] * 5
+    assert [int(r["step"]) for r in rows] == list(range(5)) * 2
+    # chain30 starts straight along +x: its tip at (30, 0, 0), and the tip force
+    # is along +y, so the tip moves towards +y
+    x0, y0 = float(rows[0]["x"]), float(rows[0]["y"])
+    assert x0 == pytest.approx(30.0, abs=1e-12) and y0 == pytest.approx(0.0, abs=1e-12)
+    assert float(rows[4]["y"]) > 0
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--bogus"], "unknown option"),
+    (["--steps", "x"], "--steps"),
+    (["--steps", "0"], "--steps"),
+    (["--eps", "-1"], "--eps"),
+    (["--eps", "2^-5..3"], "--eps"),
+    (["--scene", "teapot"], "unknown scene"),
+    (["--metric", "worst"], "unknown measure"),
+    (["--forces", "1,,"], "--forces"),
+    (["--forces", "31", "--scene", "chain30"], "forces"),
+    (["--steps"], "needs a value"),
+])
+def test_bad_input(args, message):
+    res = run("--joints", "200", "--quiet", *args, check=False)
+    assert res.returncode != 0
+    assert message in res.stderr
