@@ -34,7 +34,7 @@ CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden -DAQS_BUILDING_L
 CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
 CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude \
                  -I/usr/include/eigen3 $(SANFLAGS)
-LDLIBS := -lm
+LDLIBS := -lccd -lm
 
 SRCS := $(sort $(wildcard src/*.c))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))

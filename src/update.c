@@ -5,6 +5,7 @@
 
 #include <stdlib.h>
 
+#include "collide.h"
 #include "dca.h"
 #include "dense.h"
 #include "totalacc.h"
@@ -45,6 +46,7 @@ void update_node_poses(aqs_linkage *L, int32_t n)
         if (i != C->ka) P[ci++] = PA[i];
     for (i = 0; i < B->nh; i++)
         if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+    if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
 void update_all_poses(aqs_linkage *L)

@@ -1,0 +1,415 @@
+/* broadphase.c -- bounding spheres on the assembly tree, refitted lazily,
+ * and the top-down traversal of node pairs (self-collision and obstacles:
+ * the obstacles live in the world's leaf). The brute-force all-pairs query
+ * is here too, as the reference the tree query must reproduce exactly. */
+#include "collide.h"
+
+#include <math.h>
+#include <string.h>
+
+/* ------------------------------------------------------------ filters */
+
+static uint32_t body_group(const collision *c, int32_t b)
+{
+    if (b < 0) return c->world_group;
+    return b < c->nfilter ? c->group[b] : 1u;
+}
+
+static uint32_t body_mask(const collision *c, int32_t b)
+{
+    if (b < 0) return c->world_mask;
+    return b < c->nfilter ? c->mask[b] : 0xFFFFFFFFu;
+}
+
+static int excluded(const collision *c, int32_t a, int32_t b)
+{
+    uint64_t key;
+    int32_t lo = 0, hi = c->nexcl;
+    if (a > b) { int32_t t = a; a = b; b = t; }
+    key = ((uint64_t)(uint32_t)(a + 1) << 32) | (uint32_t)(b + 1);
+    while (lo < hi) {
+        int32_t mid = lo + (hi - lo) / 2;
+        if (c->excl[mid] < key) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < c->nexcl && c->excl[lo] == key;
+}
+
+/* Whether shapes i and j (on different rigid groups) may touch. */
+static int pair_allowed(const aqs_linkage *L, const collision *c, int32_t i, int32_t j)
+{
+    int32_t a = c->shapes[i].body, b = c->shapes[j].body;
+    if (!(body_group(c, a) & body_mask(c, b)) || !(body_group(c, b) & body_mask(c, a))) return 0;
+    if (!c->joined && a >= 0 && b >= 0 &&
+        (L->joints[L->m.parent_joint[a]].parent == b || L->joints[L->m.parent_joint[b]].parent == a))
+        return 0;
+    return c->nexcl == 0 || !excluded(c, a, b);
+}
+
+/* ------------------------------------------------------------ spheres */
+
+static double dist3(const double a[3], const double b[3])
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(vec3_dot(d, d));
+}
+
+/* Spheres (cx, rx), (cy, ry) in one frame may overlap: conservative by a
+ * relative 1e-9 for rounding in the transforms. */
+static int spheres_overlap(const double cx[3], double rx, const double cy[3], double ry)
+{
+    double scale = rx + ry + 1e-3 * (fabs(cx[0]) + fabs(cx[1]) + fabs(cx[2]) + fabs(cy[0]) +
+                                     fabs(cy[1]) + fabs(cy[2]));
+    return dist3(cx, cy) <= rx + ry + 1e-9 * scale;
+}
+
+/* Smallest sphere enclosing two spheres (radius < 0: empty). */
+static void merge(const double *s1, const double *s2, double *out)
+{
+    double d, R;
+    int i;
+    if (s1[3] < 0.0) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    if (s2[3] < 0.0) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    d = dist3(s1, s2);
+    if (d + s2[3] <= s1[3]) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    if (d + s1[3] <= s2[3]) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    R = 0.5 * (d + s1[3] + s2[3]);
+    for (i = 0; i < 3; i++) out[i] = s1[i] + (R - s1[3]) / d * (s2[i] - s1[i]);
+    out[3] = R * (1.0 + 1e-12);
+}
+
+/* ------------------------------------------------------------ frames */
+
+/* Pose of B's frame (the child frame of the principal joint) in C's frame,
+ * and B's world pose from C's. Same operations as src/update.c. */
+static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
+{
+    const tree *t = &L->t;
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+}
+
+static void child_world(const aqs_linkage *L, const node *C, const pose *Wc, pose *Wb)
+{
+    pose Pk;
+    child_in_node(L, C, &Pk);
+    pose_compose(Wc, &Pk, Wb);
+}
+
+/* ------------------------------------------------------------ state */
+
+void broadphase_reset(aqs_linkage *L)
+{
+    collision *c = L->col;
+    if (!c) return;
+    lk_free(L, c->shape_in);
+    lk_free(L, c->comp_start);
+    lk_free(L, c->comp_shapes);
+    lk_free(L, c->sph);
+    lk_free(L, c->moved);
+    lk_free(L, c->clean);
+    lk_free(L, c->comp_world);
+    lk_free(L, c->placed);
+    lk_free(L, c->centres);
+    c->shape_in = NULL;
+    c->comp_start = c->comp_shapes = NULL;
+    c->sph = c->centres = NULL;
+    c->moved = c->clean = NULL;
+    c->comp_world = NULL;
+    c->placed = NULL;
+    c->built = 0;
+}
+
+void broadphase_forget(aqs_linkage *L)
+{
+    collision *c = L->col;
+    if (c && c->built && L->t.nnodes > 0) memset(c->clean, 0, (size_t)L->t.nnodes);
+}
+
+void broadphase_node_moved(aqs_linkage *L, int32_t n)
+{
+    collision *c = L->col;
+    if (!c->built) return;
+    for (; n >= 0 && !c->moved[n]; n = L->t.nodes[n].parent) c->moved[n] = 1;
+}
+
+static int32_t comp_of_shape(const aqs_linkage *L, const shape_def *s)
+{
+    return s->body < 0 ? L->m.ncomp : L->m.comp_of_body[s->body];
+}
+
+/* Refit node n if it moved (children first). */
+static void refit(aqs_linkage *L, collision *c, int32_t n)
+{
+    const node *C = &L->t.nodes[n];
+    pose Pk;
+    double sb[4];
+    if (!c->moved[n]) return;
+    c->moved[n] = 0;
+    c->clean[n] = 0;
+    if (C->joint < 0) return; /* leaves are fixed at build */
+    c->nodes_refit++;
+    refit(L, c, C->a);
+    refit(L, c, C->b);
+    child_in_node(L, C, &Pk);
+    mat3_vec(Pk.R, c->sph + 4 * C->b, sb);
+    sb[0] += Pk.p[0];
+    sb[1] += Pk.p[1];
+    sb[2] += Pk.p[2];
+    sb[3] = c->sph[4 * C->b + 3];
+    merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
+}
+
+static void fit_leaf(aqs_linkage *L, collision *c, int32_t n)
+{
+    int32_t comp = L->t.nodes[n].comp, k, lo = c->comp_start[comp], hi = c->comp_start[comp + 1];
+    double *s = c->sph + 4 * n, ctr[3] = {0, 0, 0}, r = 0.0;
+    s[0] = s[1] = s[2] = 0.0;
+    s[3] = -1.0;
+    if (lo == hi) return;
+    for (k = lo; k < hi; k++) {
+        double w[3];
+        int32_t i = c->comp_shapes[k];
+        mat3_vec(c->shape_in[i].R, c->shapes[i].centre, w);
+        ctr[0] += (w[0] + c->shape_in[i].p[0]) / (hi - lo);
+        ctr[1] += (w[1] + c->shape_in[i].p[1]) / (hi - lo);
+        ctr[2] += (w[2] + c->shape_in[i].p[2]) / (hi - lo);
+    }
+    for (k = lo; k < hi; k++) {
+        double w[3], d;
+        int32_t i = c->comp_shapes[k];
+        mat3_vec(c->shape_in[i].R, c->shapes[i].centre, w);
+        w[0] += c->shape_in[i].p[0];
+        w[1] += c->shape_in[i].p[1];
+        w[2] += c->shape_in[i].p[2];
+        d = dist3(w, ctr) + c->shapes[i].radius;
+        if (d > r) r = d;
+    }
+    memcpy(s, ctr, sizeof ctr);
+    s[3] = r * (1.0 + 1e-12);
+}
+
+aqs_status broadphase_build(aqs_linkage *L, const char *fn)
+{
+    collision *c = L->col;
+    const model *m = &L->m;
+    int32_t nn = L->t.nnodes, ns = c->nshapes, i, n;
+    if (c->built) return AQS_OK;
+    c->shape_in = lk_calloc(L, (size_t)ns + 1, sizeof(pose));
+    c->comp_start = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
+    c->comp_shapes = lk_calloc(L, (size_t)ns + 1, sizeof(int32_t));
+    c->sph = lk_calloc(L, (size_t)nn * 4 + 1, sizeof(double));
+    c->moved = lk_calloc(L, (size_t)nn + 1, 1);
+    c->clean = lk_calloc(L, (size_t)nn + 1, 1);
+    c->comp_world = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(pose));
+    c->placed = lk_calloc(L, (size_t)ns + 1, sizeof(placed_shape));
+    c->centres = lk_calloc(L, (size_t)ns * 3 + 1, sizeof(double));
+    if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->clean ||
+        !c->comp_world || !c->placed || !c->centres) {
+        broadphase_reset(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory (collision data of %d nodes, %d shapes)",
+                       fn, (int)nn, (int)ns);
+    }
+    /* Shapes grouped by rigid group, in index order within a group: count,
+     * prefix sums (start of each group), fill (start -> end), shift back. */
+    for (i = 0; i < ns; i++) c->comp_start[comp_of_shape(L, &c->shapes[i]) + 1]++;
+    for (i = 0; i <= m->ncomp; i++) c->comp_start[i + 1] += c->comp_start[i];
+    for (i = 0; i < ns; i++) c->comp_shapes[c->comp_start[comp_of_shape(L, &c->shapes[i])]++] = i;
+    for (i = m->ncomp + 1; i > 0; i--) c->comp_start[i] = c->comp_start[i - 1];
+    c->comp_start[0] = 0;
+    for (i = 0; i < ns; i++) {
+        const shape_def *s = &c->shapes[i];
+        if (s->body < 0) c->shape_in[i] = s->local;
+        else pose_compose(&m->body_in_comp[s->body], &s->local, &c->shape_in[i]);
+    }
+    for (n = 0; n < nn; n++) {
+        if (L->t.nodes[n].joint < 0) fit_leaf(L, c, n);
+        else c->moved[n] = 1;
+    }
+    c->built = 1;
+    c->nodes_refit = 0;
+    if (nn > 0) refit(L, c, L->t.root);
+    return AQS_OK;
+}
+
+/* ------------------------------------------------------------ queries */
+
+typedef struct {
+    aqs_linkage *L;
+    collision *c;
+    aqs_contact *out;
+    size_t cap, count;
+    int any, stop;
+} query;
+
+static int shapes_may_touch(const placed_shape *a, const double ca[3], const placed_shape *b,
+                            const double cb[3])
+{
+    return spheres_overlap(ca, a->s->radius, cb, b->s->radius);
+}
+
+/* Narrow phase of shapes i and j placed at pi, pj (sphere centres ci, cj):
+ * a is the lower index, or the body when the other is an obstacle. */
+static void test_shapes(query *q, int32_t i, const placed_shape *pi, const double ci[3], int32_t j,
+                        const placed_shape *pj, const double cj[3])
+{
+    collision *c = q->c;
+    double depth, nrm[3], pt[3];
+    int swap;
+    if (!pair_allowed(q->L, c, i, j)) return;
+    if (!shapes_may_touch(pi, ci, pj, cj)) return;
+    swap = c->shapes[i].body < 0 || (c->shapes[j].body >= 0 && j < i);
+    c->narrow_tests++;
+    if (!(swap ? narrow_contact(pj, pi, &depth, nrm, pt) : narrow_contact(pi, pj, &depth, nrm, pt)))
+        return;
+    if (q->count < q->cap) {
+        aqs_contact *o = &q->out[q->count];
+        o->shape_a = swap ? j : i;
+        o->shape_b = swap ? i : j;
+        o->body_a = c->shapes[o->shape_a].body;
+        o->body_b = c->shapes[o->shape_b].body;
+        o->depth = depth;
+        o->nx = nrm[0];
+        o->ny = nrm[1];
+        o->nz = nrm[2];
+        o->px = pt[0];
+        o->py = pt[1];
+        o->pz = pt[2];
+    }
+    q->count++;
+    if (q->any) q->stop = 1;
+}
+
+static void leaf_pair(query *q, int32_t x, const pose *Wx, int32_t y, const pose *Wy)
+{
+    collision *c = q->c;
+    int32_t cx = q->L->t.nodes[x].comp, cy = q->L->t.nodes[y].comp, k, l;
+    for (k = c->comp_start[cx]; k < c->comp_start[cx + 1] && !q->stop; k++) {
+        int32_t i = c->comp_shapes[k];
+        placed_shape pi;
+        double ci[3];
+        narrow_place(&c->shapes[i], Wx, &c->shape_in[i], &pi);
+        narrow_centre(&pi, ci);
+        for (l = c->comp_start[cy]; l < c->comp_start[cy + 1] && !q->stop; l++) {
+            int32_t j = c->comp_shapes[l];
+            placed_shape pj;
+            double cj[3];
+            narrow_place(&c->shapes[j], Wy, &c->shape_in[j], &pj);
+            narrow_centre(&pj, cj);
+            test_shapes(q, i, &pi, ci, j, &pj, cj);
+        }
+    }
+}
+
+static void world_centre(const double *s, const pose *W, double out[3])
+{
+    mat3_vec(W->R, s, out);
+    out[0] += W->p[0];
+    out[1] += W->p[1];
+    out[2] += W->p[2];
+}
+
+static void pair(query *q, int32_t x, const pose *Wx, int32_t y, const pose *Wy)
+{
+    collision *c = q->c;
+    const node *X = &q->L->t.nodes[x], *Y = &q->L->t.nodes[y];
+    double cx[3], cy[3];
+    pose Wc;
+    if (q->stop || c->sph[4 * x + 3] < 0.0 || c->sph[4 * y + 3] < 0.0) return;
+    c->volume_tests++;
+    world_centre(c->sph + 4 * x, Wx, cx);
+    world_centre(c->sph + 4 * y, Wy, cy);
+    if (!spheres_overlap(cx, c->sph[4 * x + 3], cy, c->sph[4 * y + 3])) return;
+    if (X->joint < 0 && Y->joint < 0) {
+        leaf_pair(q, x, Wx, y, Wy);
+    } else if (Y->joint < 0 || (X->joint >= 0 && c->sph[4 * x + 3] >= c->sph[4 * y + 3])) {
+        child_world(q->L, X, Wx, &Wc);
+        pair(q, X->a, Wx, y, Wy);
+        pair(q, X->b, &Wc, y, Wy);
+    } else {
+        child_world(q->L, Y, Wy, &Wc);
+        pair(q, x, Wx, Y->a, Wy);
+        pair(q, x, Wx, Y->b, &Wc);
+    }
+}
+
+static void self(query *q, int32_t n, const pose *W)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    size_t before = q->count;
+    pose Wb;
+    if (q->stop || C->joint < 0 || c->sph[4 * n + 3] < 0.0) return;
+    if (c->clean[n]) {
+        c->nodes_skipped++;
+        return;
+    }
+    child_world(q->L, C, W, &Wb);
+    self(q, C->a, W);
+    self(q, C->b, &Wb);
+    pair(q, C->a, W, C->b, &Wb);
+    if (!q->stop && q->count == before) c->clean[n] = 1;
+}
+
+/* World poses of every rigid group, top-down, by the traversal's operations. */
+static void all_comp_world(const aqs_linkage *L, collision *c, int32_t n, const pose *W)
+{
+    const node *C = &L->t.nodes[n];
+    pose Wb;
+    if (C->joint < 0) {
+        c->comp_world[C->comp] = *W;
+        return;
+    }
+    child_world(L, C, W, &Wb);
+    all_comp_world(L, c, C->a, W);
+    all_comp_world(L, c, C->b, &Wb);
+}
+
+static void brute(query *q)
+{
+    aqs_linkage *L = q->L;
+    collision *c = q->c;
+    int32_t i, j, ns = c->nshapes;
+    pose I;
+    pose_identity(&I);
+    all_comp_world(L, c, L->t.root, &I);
+    for (i = 0; i < ns; i++) {
+        narrow_place(&c->shapes[i], &c->comp_world[comp_of_shape(L, &c->shapes[i])],
+                     &c->shape_in[i], &c->placed[i]);
+        narrow_centre(&c->placed[i], c->centres + 3 * i);
+    }
+    for (i = 0; i < ns && !q->stop; i++)
+        for (j = i + 1; j < ns && !q->stop; j++) {
+            if (comp_of_shape(L, &c->shapes[i]) == comp_of_shape(L, &c->shapes[j])) continue;
+            c->volume_tests++;
+            test_shapes(q, i, &c->placed[i], c->centres + 3 * i, j, &c->placed[j],
+                        c->centres + 3 * j);
+        }
+}
+
+size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any)
+{
+    collision *c = L->col;
+    query q;
+    pose I;
+    int32_t n;
+    q.L = L;
+    q.c = c;
+    q.out = out;
+    q.cap = capacity;
+    q.count = 0;
+    q.any = any;
+    q.stop = 0;
+    c->nodes_refit = c->volume_tests = c->narrow_tests = c->nodes_skipped = 0;
+    if (L->t.nnodes == 0) return 0; /* everything welded to the world */
+    if (mode == AQS_COLLIDE_FULL)
+        for (n = 0; n < L->t.nnodes; n++)
+            if (L->t.nodes[n].joint >= 0) c->moved[n] = 1;
+    refit(L, c, L->t.root);
+    if (mode == AQS_COLLIDE_BRUTE) {
+        brute(&q);
+    } else {
+        pose_identity(&I);
+        self(&q, L->t.root, &I);
+    }
+    return q.count;
+}
