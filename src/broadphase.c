@@ -55,12 +55,14 @@ static double dist3(const double a[3], const double b[3])
 }
 
 /* Spheres (cx, rx), (cy, ry) in one frame may overlap: conservative by a
- * relative 1e-9 for rounding in the transforms. */
+ * relative 1e-9 of the radii and 1e-12 of the coordinates, for rounding in
+ * the transforms (squared distances: no square root). */
 static int spheres_overlap(const double cx[3], double rx, const double cy[3], double ry)
 {
-    double scale = rx + ry + 1e-3 * (fabs(cx[0]) + fabs(cx[1]) + fabs(cx[2]) + fabs(cy[0]) +
-                                     fabs(cy[1]) + fabs(cy[2]));
-    return dist3(cx, cy) <= rx + ry + 1e-9 * scale;
+    double d0 = cx[0] - cy[0], d1 = cx[1] - cy[1], d2 = cx[2] - cy[2];
+    double r = (rx + ry) * (1.0 + 1e-9) +
+               1e-12 * (fabs(cx[0]) + fabs(cx[1]) + fabs(cx[2]) + fabs(cy[0]) + fabs(cy[1]) + fabs(cy[2]));
+    return d0 * d0 + d1 * d1 + d2 * d2 <= r * r;
 }
 
 /* Smallest sphere enclosing two spheres (radius < 0: empty). */
@@ -88,11 +90,18 @@ static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
     pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
 }
 
-static void child_world(const aqs_linkage *L, const node *C, const pose *Wc, pose *Wb)
+/* World pose of node n's child b from n's world pose (cached Pk). */
+static void child_world(const collision *c, int32_t n, const pose *Wc, pose *Wb)
 {
-    pose Pk;
-    child_in_node(L, C, &Pk);
-    pose_compose(Wc, &Pk, Wb);
+    pose_compose(Wc, &c->pk[n], Wb);
+}
+
+static void world_centre(const double *s, const pose *W, double out[3])
+{
+    mat3_vec(W->R, s, out);
+    out[0] += W->p[0];
+    out[1] += W->p[1];
+    out[2] += W->p[2];
 }
 
 /* ------------------------------------------------------------ state */
@@ -107,6 +116,10 @@ void broadphase_reset(aqs_linkage *L)
     lk_free(L, c->sph);
     lk_free(L, c->moved);
     lk_free(L, c->clean);
+    lk_free(L, c->pk);
+    lk_free(L, c->wpose);
+    lk_free(L, c->wcen);
+    lk_free(L, c->wstamp);
     lk_free(L, c->comp_world);
     lk_free(L, c->placed);
     lk_free(L, c->centres);
@@ -114,7 +127,10 @@ void broadphase_reset(aqs_linkage *L)
     c->comp_start = c->comp_shapes = NULL;
     c->sph = c->centres = NULL;
     c->moved = c->clean = NULL;
-    c->comp_world = NULL;
+    c->comp_world = c->pk = c->wpose = NULL;
+    c->wcen = NULL;
+    c->wstamp = NULL;
+    c->qstamp = 0;
     c->placed = NULL;
     c->built = 0;
 }
@@ -150,7 +166,8 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     c->nodes_refit++;
     refit(L, c, C->a);
     refit(L, c, C->b);
-    child_in_node(L, C, &Pk);
+    child_in_node(L, C, &c->pk[n]);
+    Pk = c->pk[n];
     mat3_vec(Pk.R, c->sph + 4 * C->b, sb);
     sb[0] += Pk.p[0];
     sb[1] += Pk.p[1];
@@ -201,10 +218,14 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->moved = lk_calloc(L, (size_t)nn + 1, 1);
     c->clean = lk_calloc(L, (size_t)nn + 1, 1);
     c->comp_world = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(pose));
+    c->pk = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
+    c->wpose = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
+    c->wcen = lk_calloc(L, (size_t)nn * 3 + 1, sizeof(double));
+    c->wstamp = lk_calloc(L, (size_t)nn + 1, sizeof(uint32_t));
     c->placed = lk_calloc(L, (size_t)ns + 1, sizeof(placed_shape));
     c->centres = lk_calloc(L, (size_t)ns * 3 + 1, sizeof(double));
     if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->clean ||
-        !c->comp_world || !c->placed || !c->centres) {
+        !c->comp_world || !c->pk || !c->wpose || !c->wcen || !c->wstamp || !c->placed || !c->centres) {
         broadphase_reset(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (collision data of %d nodes, %d shapes)",
                        fn, (int)nn, (int)ns);
@@ -279,9 +300,26 @@ static void test_shapes(query *q, int32_t i, const placed_shape *pi, const doubl
     if (q->any) q->stop = 1;
 }
 
-static void leaf_pair(query *q, int32_t x, const pose *Wx, int32_t y, const pose *Wy)
+/* World pose of node n's frame and its sphere's world centre, memoized per
+ * query; computed from the parent's by the operations of all_comp_world. */
+static const pose *world(query *q, int32_t n)
 {
     collision *c = q->c;
+    if (c->wstamp[n] != c->qstamp) {
+        int32_t p = q->L->t.nodes[n].parent;
+        const pose *Wp = world(q, p);
+        if (q->L->t.nodes[p].a == n) c->wpose[n] = *Wp;
+        else child_world(c, p, Wp, &c->wpose[n]);
+        world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
+        c->wstamp[n] = c->qstamp;
+    }
+    return &c->wpose[n];
+}
+
+static void leaf_pair(query *q, int32_t x, int32_t y)
+{
+    collision *c = q->c;
+    const pose *Wx = world(q, x), *Wy = world(q, y);
     int32_t cx = q->L->t.nodes[x].comp, cy = q->L->t.nodes[y].comp, k, l;
     for (k = c->comp_start[cx]; k < c->comp_start[cx + 1] && !q->stop; k++) {
         int32_t i = c->comp_shapes[k];
@@ -300,53 +338,39 @@ static void leaf_pair(query *q, int32_t x, const pose *Wx, int32_t y, const pose
     }
 }
 
-static void world_centre(const double *s, const pose *W, double out[3])
-{
-    mat3_vec(W->R, s, out);
-    out[0] += W->p[0];
-    out[1] += W->p[1];
-    out[2] += W->p[2];
-}
-
-static void pair(query *q, int32_t x, const pose *Wx, int32_t y, const pose *Wy)
+static void pair(query *q, int32_t x, int32_t y)
 {
     collision *c = q->c;
     const node *X = &q->L->t.nodes[x], *Y = &q->L->t.nodes[y];
-    double cx[3], cy[3];
-    pose Wc;
     if (q->stop || c->sph[4 * x + 3] < 0.0 || c->sph[4 * y + 3] < 0.0) return;
     c->volume_tests++;
-    world_centre(c->sph + 4 * x, Wx, cx);
-    world_centre(c->sph + 4 * y, Wy, cy);
-    if (!spheres_overlap(cx, c->sph[4 * x + 3], cy, c->sph[4 * y + 3])) return;
+    world(q, x);
+    world(q, y);
+    if (!spheres_overlap(c->wcen + 3 * x, c->sph[4 * x + 3], c->wcen + 3 * y, c->sph[4 * y + 3])) return;
     if (X->joint < 0 && Y->joint < 0) {
-        leaf_pair(q, x, Wx, y, Wy);
+        leaf_pair(q, x, y);
     } else if (Y->joint < 0 || (X->joint >= 0 && c->sph[4 * x + 3] >= c->sph[4 * y + 3])) {
-        child_world(q->L, X, Wx, &Wc);
-        pair(q, X->a, Wx, y, Wy);
-        pair(q, X->b, &Wc, y, Wy);
+        pair(q, X->a, y);
+        pair(q, X->b, y);
     } else {
-        child_world(q->L, Y, Wy, &Wc);
-        pair(q, x, Wx, Y->a, Wy);
-        pair(q, x, Wx, Y->b, &Wc);
+        pair(q, x, Y->a);
+        pair(q, x, Y->b);
     }
 }
 
-static void self(query *q, int32_t n, const pose *W)
+static void self(query *q, int32_t n)
 {
     collision *c = q->c;
     const node *C = &q->L->t.nodes[n];
     size_t before = q->count;
-    pose Wb;
     if (q->stop || C->joint < 0 || c->sph[4 * n + 3] < 0.0) return;
     if (c->clean[n]) {
         c->nodes_skipped++;
         return;
     }
-    child_world(q->L, C, W, &Wb);
-    self(q, C->a, W);
-    self(q, C->b, &Wb);
-    pair(q, C->a, W, C->b, &Wb);
+    self(q, C->a);
+    self(q, C->b);
+    pair(q, C->a, C->b);
     if (!q->stop && q->count == before) c->clean[n] = 1;
 }
 
@@ -359,7 +383,7 @@ static void all_comp_world(const aqs_linkage *L, collision *c, int32_t n, const 
         c->comp_world[C->comp] = *W;
         return;
     }
-    child_world(L, C, W, &Wb);
+    child_world(c, n, W, &Wb);
     all_comp_world(L, c, C->a, W);
     all_comp_world(L, c, C->b, &Wb);
 }
@@ -377,20 +401,22 @@ static void brute(query *q)
                      &c->shape_in[i], &c->placed[i]);
         narrow_centre(&c->placed[i], c->centres + 3 * i);
     }
-    for (i = 0; i < ns && !q->stop; i++)
+    for (i = 0; i < ns && !q->stop; i++) {
+        const double *ci = c->centres + 3 * i, ri = c->shapes[i].radius;
+        int32_t comp = comp_of_shape(L, &c->shapes[i]);
         for (j = i + 1; j < ns && !q->stop; j++) {
-            if (comp_of_shape(L, &c->shapes[i]) == comp_of_shape(L, &c->shapes[j])) continue;
             c->volume_tests++;
-            test_shapes(q, i, &c->placed[i], c->centres + 3 * i, j, &c->placed[j],
-                        c->centres + 3 * j);
+            if (!spheres_overlap(ci, ri, c->centres + 3 * j, c->shapes[j].radius)) continue;
+            if (comp == comp_of_shape(L, &c->shapes[j])) continue;
+            test_shapes(q, i, &c->placed[i], ci, j, &c->placed[j], c->centres + 3 * j);
         }
+    }
 }
 
 size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any)
 {
     collision *c = L->col;
     query q;
-    pose I;
     int32_t n;
     q.L = L;
     q.c = c;
@@ -408,8 +434,15 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
     if (mode == AQS_COLLIDE_BRUTE) {
         brute(&q);
     } else {
-        pose_identity(&I);
-        self(&q, L->t.root, &I);
+        if (++c->qstamp == 0) { /* wrapped: forget every stamp */
+            memset(c->wstamp, 0, (size_t)L->t.nnodes * sizeof(uint32_t));
+            c->qstamp = 1;
+        }
+        n = L->t.root;
+        pose_identity(&c->wpose[n]);
+        world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
+        c->wstamp[n] = c->qstamp;
+        self(&q, n);
     }
     return q.count;
 }

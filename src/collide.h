@@ -30,6 +30,11 @@ typedef struct collision {
                             in the node's upper-handle frame (MATH.md §9.2) */
     unsigned char *moved; /* a joint inside the node moved since its sphere was fitted (top-closed) */
     unsigned char *clean; /* the node's subassembly was free of internal contact when last queried */
+    pose *pk;             /* per internal node: the child frame of its principal joint in the
+                             node's frame, cached at refit */
+    pose *wpose;          /* per node: world pose of its frame, valid when wstamp == qstamp */
+    double *wcen;         /* per node: world centre of its sphere, likewise */
+    uint32_t *wstamp, qstamp;
     pose *comp_world;     /* ncomp + 1: brute-force scratch */
     placed_shape *placed; /* nshapes: brute-force scratch */
     double *centres;      /* 3 nshapes: brute-force scratch */
