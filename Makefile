@@ -46,11 +46,12 @@ C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.
 CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
-BENCH_MAINS := bench/demo.c bench/exact_bench.c bench/adaptive_bench.c bench/aqs_bench.c
+BENCH_MAINS := bench/demo.c bench/exact_bench.c bench/adaptive_bench.c bench/aqs_bench.c \
+               bench/collide_bench.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
-        deps demo bench install clean
+        deps demo bench bench-collide install clean
 
 all: lib
 lib: $(SHLIB) $(STLIB)
@@ -137,6 +138,11 @@ bench: $(BUILD)/bench/exact_bench $(if $(wildcard bench/adaptive_bench.c),$(BUIL
 	@mkdir -p docs/bench
 	$(BUILD)/bench/exact_bench
 	$(if $(wildcard bench/adaptive_bench.c),$(BUILD)/bench/adaptive_bench)
+	@$(MAKE) --no-print-directory bench-collide
+
+# Collision queries: lazy tree vs full tree vs brute force (docs/bench.md, "Collision").
+bench-collide: $(BUILD)/bench/collide_bench
+	$(BUILD)/bench/collide_bench
 
 clean:
 	rm -rf build

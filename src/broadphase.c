@@ -115,7 +115,12 @@ void broadphase_reset(aqs_linkage *L)
     lk_free(L, c->comp_shapes);
     lk_free(L, c->sph);
     lk_free(L, c->moved);
-    lk_free(L, c->clean);
+    lk_free(L, c->cached);
+    lk_free(L, c->ncont);
+    lk_free(L, c->xoff);
+    lk_free(L, c->xcnt);
+    lk_free(L, c->xpool[0]);
+    lk_free(L, c->xpool[1]);
     lk_free(L, c->pk);
     lk_free(L, c->wpose);
     lk_free(L, c->wcen);
@@ -126,7 +131,9 @@ void broadphase_reset(aqs_linkage *L)
     c->shape_in = NULL;
     c->comp_start = c->comp_shapes = NULL;
     c->sph = c->centres = NULL;
-    c->moved = c->clean = NULL;
+    c->moved = c->cached = NULL;
+    c->ncont = c->xoff = c->xcnt = c->xpool[0] = c->xpool[1] = NULL;
+    c->xcap = c->xused = c->xcur = 0;
     c->comp_world = c->pk = c->wpose = NULL;
     c->wcen = NULL;
     c->wstamp = NULL;
@@ -138,7 +145,10 @@ void broadphase_reset(aqs_linkage *L)
 void broadphase_forget(aqs_linkage *L)
 {
     collision *c = L->col;
-    if (c && c->built && L->t.nnodes > 0) memset(c->clean, 0, (size_t)L->t.nnodes);
+    if (c && c->built && L->t.nnodes > 0) {
+        memset(c->cached, 0, (size_t)L->t.nnodes);
+        c->xused = 0;
+    }
 }
 
 void broadphase_node_moved(aqs_linkage *L, int32_t n)
@@ -161,7 +171,7 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     double sb[4];
     if (!c->moved[n]) return;
     c->moved[n] = 0;
-    c->clean[n] = 0;
+    c->cached[n] = 0;
     if (C->joint < 0) return; /* leaves are fixed at build */
     c->nodes_refit++;
     refit(L, c, C->a);
@@ -216,7 +226,13 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->comp_shapes = lk_calloc(L, (size_t)ns + 1, sizeof(int32_t));
     c->sph = lk_calloc(L, (size_t)nn * 4 + 1, sizeof(double));
     c->moved = lk_calloc(L, (size_t)nn + 1, 1);
-    c->clean = lk_calloc(L, (size_t)nn + 1, 1);
+    c->cached = lk_calloc(L, (size_t)nn + 1, 1);
+    c->ncont = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xoff = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xcnt = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xcap = 4 * ns + 1024;
+    c->xpool[0] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
+    c->xpool[1] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
     c->comp_world = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(pose));
     c->pk = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
     c->wpose = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
@@ -224,7 +240,8 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->wstamp = lk_calloc(L, (size_t)nn + 1, sizeof(uint32_t));
     c->placed = lk_calloc(L, (size_t)ns + 1, sizeof(placed_shape));
     c->centres = lk_calloc(L, (size_t)ns * 3 + 1, sizeof(double));
-    if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->clean ||
+    if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->cached ||
+        !c->ncont || !c->xoff || !c->xcnt || !c->xpool[0] || !c->xpool[1] ||
         !c->comp_world || !c->pk || !c->wpose || !c->wcen || !c->wstamp || !c->placed || !c->centres) {
         broadphase_reset(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (collision data of %d nodes, %d shapes)",
@@ -260,6 +277,8 @@ typedef struct {
     aqs_contact *out;
     size_t cap, count;
     int any, stop;
+    int rec;      /* record hits as cross pairs of the node being computed */
+    int overflow; /* the pair pool ran full during this query: cache nothing more */
 } query;
 
 static int shapes_may_touch(const placed_shape *a, const double ca[3], const placed_shape *b,
@@ -298,6 +317,15 @@ static void test_shapes(query *q, int32_t i, const placed_shape *pi, const doubl
     }
     q->count++;
     if (q->any) q->stop = 1;
+    if (q->rec) {
+        if (c->xused < c->xcap) {
+            c->xpool[c->xcur][2 * c->xused] = i;
+            c->xpool[c->xcur][2 * c->xused + 1] = j;
+            c->xused++;
+        } else {
+            q->overflow = 1;
+        }
+    }
 }
 
 /* World pose of node n's frame and its sphere's world centre, memoized per
@@ -358,20 +386,85 @@ static void pair(query *q, int32_t x, int32_t y)
     }
 }
 
+/* Shape i placed at its rigid group's world frame, and its sphere centre. */
+static void place_shape(query *q, int32_t i, placed_shape *p, double ctr[3])
+{
+    collision *c = q->c;
+    const shape_def *s = &c->shapes[i];
+    int32_t comp = s->body < 0 ? q->L->m.ncomp : q->L->m.comp_of_body[s->body];
+    narrow_place(s, world(q, q->L->t.leaf_of_comp[comp]), &c->shape_in[i], p);
+    narrow_centre(p, ctr);
+}
+
+/* Node n did not move since its contacts were cached: test again only the
+ * cached pairs (same placements, so the same bits as a traversal). */
+static void replay(query *q, int32_t n)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    int32_t k;
+    if (q->stop || C->joint < 0 || c->ncont[n] == 0) return;
+    replay(q, C->a);
+    replay(q, C->b);
+    for (k = c->xoff[n]; k < c->xoff[n] + c->xcnt[n] && !q->stop; k++) {
+        int32_t i = c->xpool[c->xcur][2 * k], j = c->xpool[c->xcur][2 * k + 1];
+        placed_shape pi, pj;
+        double ci[3], cj[3];
+        place_shape(q, i, &pi, ci);
+        place_shape(q, j, &pj, cj);
+        test_shapes(q, i, &pi, ci, j, &pj, cj);
+    }
+}
+
+static int known(const collision *c, const aqs_linkage *L, int32_t n)
+{
+    return L->t.nodes[n].joint < 0 || c->sph[4 * n + 3] < 0.0 || c->cached[n];
+}
+
 static void self(query *q, int32_t n)
 {
     collision *c = q->c;
     const node *C = &q->L->t.nodes[n];
     size_t before = q->count;
+    int32_t off;
     if (q->stop || C->joint < 0 || c->sph[4 * n + 3] < 0.0) return;
-    if (c->clean[n]) {
+    if (c->cached[n]) {
         c->nodes_skipped++;
+        replay(q, n);
         return;
     }
     self(q, C->a);
     self(q, C->b);
+    off = c->xused;
+    q->rec = 1;
     pair(q, C->a, C->b);
-    if (!q->stop && q->count == before) c->clean[n] = 1;
+    q->rec = 0;
+    if (!q->stop && !q->overflow && known(c, q->L, C->a) && known(c, q->L, C->b)) {
+        c->cached[n] = 1;
+        c->ncont[n] = (int32_t)(q->count - before);
+        c->xoff[n] = off;
+        c->xcnt[n] = c->xused - off;
+    }
+}
+
+/* Move the live cross pairs into the other pool (or forget every cache
+ * when they do not fit in half of it). */
+static void compact(aqs_linkage *L, collision *c)
+{
+    int32_t n, used = 0, *src = c->xpool[c->xcur], *dst = c->xpool[1 - c->xcur];
+    for (n = 0; n < L->t.nnodes; n++) {
+        if (!c->cached[n] || c->xcnt[n] == 0) continue;
+        if (used + c->xcnt[n] > c->xcap / 2) {
+            memset(c->cached, 0, (size_t)L->t.nnodes);
+            c->xused = 0;
+            return;
+        }
+        memcpy(dst + 2 * used, src + 2 * c->xoff[n], 2 * sizeof(int32_t) * (size_t)c->xcnt[n]);
+        c->xoff[n] = used;
+        used += c->xcnt[n];
+    }
+    c->xcur = 1 - c->xcur;
+    c->xused = used;
 }
 
 /* World poses of every rigid group, top-down, by the traversal's operations. */
@@ -425,6 +518,8 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
     q.count = 0;
     q.any = any;
     q.stop = 0;
+    q.rec = 0;
+    q.overflow = 0;
     c->nodes_refit = c->volume_tests = c->narrow_tests = c->nodes_skipped = 0;
     if (L->t.nnodes == 0) return 0; /* everything welded to the world */
     if (mode == AQS_COLLIDE_FULL)
@@ -443,6 +538,7 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
         world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
         c->wstamp[n] = c->qstamp;
         self(&q, n);
+        if (q.overflow || c->xused > c->xcap / 2) compact(L, c);
     }
     return q.count;
 }

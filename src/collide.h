@@ -29,7 +29,14 @@ typedef struct collision {
     double *sph;         /* 4 per tree node: bounding sphere (centre, radius; radius < 0: no shape)
                             in the node's upper-handle frame (MATH.md §9.2) */
     unsigned char *moved; /* a joint inside the node moved since its sphere was fitted (top-closed) */
-    unsigned char *clean; /* the node's subassembly was free of internal contact when last queried */
+    unsigned char *cached; /* the node's internal contacts at the last query are known (no joint
+                              inside it moved since): none if ncont == 0, else the pairs below */
+    int32_t *ncont;       /* per node: contacts inside its subassembly at the last query */
+    int32_t *xoff, *xcnt; /* per node: its cross pairs (contacts between its children), as
+                             shape index pairs at xpool[cur][2 xoff ...], xcnt of them */
+    int32_t *xpool[2];    /* two pools of xcap pairs: live ranges are compacted from one into
+                             the other when the current one is half full */
+    int32_t xcap, xused, xcur;
     pose *pk;             /* per internal node: the child frame of its principal joint in the
                              node's frame, cached at refit */
     pose *wpose;          /* per node: world pose of its frame, valid when wstamp == qstamp */

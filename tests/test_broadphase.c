@@ -402,6 +402,41 @@ static void test_idle_query_refits_nothing(void **state)
     free_scene(&S);
 }
 
+/* More contacts than the cache of contact pairs holds (4 per shape + 1024):
+ * the lazy query must still agree with brute force while it overflows and
+ * forgets its caches. 12 bodies with 12 spheres of radius 2 each, all
+ * overlapping: about 9,500 contacts for 144 shapes. */
+static void test_cache_overflow(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    const double q1[4] = {1, 0, 0, 0}, zax[3] = {0, 0, 1}, g[3] = {0, -9.81, 0};
+    int32_t b, k, step;
+    uint64_t st = 9;
+    for (b = 0; b < 12; b++) {
+        double pos[3] = {b ? 0.3 : 0.0, 0, 0};
+        test_add_body(L, 1.0, 0.2, 0, 0, 0.1);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, b - 1, b, pos, q1, zax, NULL), AQS_OK);
+        for (k = 0; k < 12; k++) {
+            double sz[3] = {2.0, 0, 0}, at[3] = {test_uniform(&st, -0.2, 0.2), test_uniform(&st, -0.2, 0.2), 0};
+            assert_int_equal(aqs_shape_add(L, b, AQS_SHAPE_SPHERE, sz, at, q1, NULL), AQS_OK);
+        }
+    }
+    assert_int_equal(aqs_linkage_set_collide_joined(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1.0 / 64), AQS_OK);
+    for (step = 0; step < 6; step++) {
+        aqs_contact *lazy, *bf;
+        size_t nl = query(L, AQS_COLLIDE_LAZY, &lazy), nb = query(L, AQS_COLLIDE_BRUTE, &bf);
+        assert_true(nl > 4 * 144 + 1024);
+        same_contacts(lazy, nl, bf, nb);
+        free(lazy);
+        free(bf);
+        assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    }
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -409,6 +444,7 @@ int main(void)
         cmocka_unit_test(test_differential_400),
         cmocka_unit_test(test_differential_2000),
         cmocka_unit_test(test_idle_query_refits_nothing),
+        cmocka_unit_test(test_cache_overflow),
     };
     return cmocka_run_group_tests_name("broadphase", tests, NULL, NULL);
 }
