@@ -500,6 +500,19 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *linkage,
                                                    int32_t *nodes_refit, int32_t *volume_tests,
                                                    int32_t *narrow_tests, int32_t *nodes_skipped);
 
+/** Penalty contact (docs/collision.md): with stiffness k > 0 (force per
+ *  unit depth, N/m), every solve and step first finds all contacts (a lazy
+ *  query) and applies, for each, the force k * depth along its normal at the
+ *  contact point: +k depth n on body b, -k depth n on body a (obstacles and
+ *  bodies welded to the world take nothing), on top of the loads set by the
+ *  caller, through the same load path. The forces do not depend on
+ *  accelerations. k = 0 (the default) turns it off. stiffness: finite,
+ *  >= 0. After finalize; builds the collision data (AQS_ENOMEM possible) so
+ *  that solving and stepping still allocate nothing. The statistics of
+ *  aqs_linkage_get_collision_stats then describe the last query of either
+ *  kind. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, double stiffness);
+
 #ifdef __cplusplus
 }
 #endif

@@ -278,6 +278,7 @@ typedef struct {
     size_t cap, count;
     int any, stop;
     int rec;      /* record hits as cross pairs of the node being computed */
+    int penalty;  /* apply penalty forces instead of writing contacts */
     int overflow; /* the pair pool ran full during this query: cache nothing more */
 } query;
 
@@ -285,6 +286,43 @@ static int shapes_may_touch(const placed_shape *a, const double ca[3], const pla
                             const double cb[3])
 {
     return spheres_overlap(ca, a->s->radius, cb, b->s->radius);
+}
+
+static const pose *world(query *q, int32_t n);
+
+/* Force sign * k depth n at world point p on the rigid group of shape i's body. */
+static void push_group(query *q, int32_t i, double sign, double depth, const double n[3],
+                       const double p[3])
+{
+    aqs_linkage *L = q->L;
+    model *m = &L->m;
+    int32_t body = q->c->shapes[i].body, comp, k;
+    const pose *W;
+    double fw[3], f[3], r[3], d[3], mom[3];
+    if (body < 0 || (comp = m->comp_of_body[body]) == m->ncomp) return; /* fixed: takes nothing */
+    W = world(q, L->t.leaf_of_comp[comp]);
+    for (k = 0; k < 3; k++) {
+        fw[k] = sign * q->c->stiffness * depth * n[k];
+        d[k] = p[k] - W->p[k];
+    }
+    mat3_tvec(W->R, fw, f); /* in the group's frame, about its origin */
+    mat3_tvec(W->R, d, r);
+    vec3_cross(r, f, mom);
+    for (k = 0; k < 3; k++) {
+        m->comp_force[6 * comp + k] += mom[k];
+        m->comp_force[6 * comp + 3 + k] += f[k];
+    }
+    if (!m->comp_loaded[comp]) {
+        m->comp_loaded[comp] = 1;
+        m->loaded_comps[m->nloaded_comps++] = comp;
+    }
+}
+
+static void apply_penalty(query *q, int32_t a, int32_t b, double depth, const double n[3],
+                          const double p[3])
+{
+    push_group(q, a, -1.0, depth, n, p);
+    push_group(q, b, 1.0, depth, n, p);
 }
 
 /* Narrow phase of shapes i and j placed at pi, pj (sphere centres ci, cj):
@@ -301,7 +339,9 @@ static void test_shapes(query *q, int32_t i, const placed_shape *pi, const doubl
     c->narrow_tests++;
     if (!(swap ? narrow_contact(pj, pi, &depth, nrm, pt) : narrow_contact(pi, pj, &depth, nrm, pt)))
         return;
-    if (q->count < q->cap) {
+    if (q->penalty) {
+        apply_penalty(q, swap ? j : i, swap ? i : j, depth, nrm, pt);
+    } else if (q->count < q->cap) {
         aqs_contact *o = &q->out[q->count];
         o->shape_a = swap ? j : i;
         o->shape_b = swap ? i : j;
@@ -506,7 +546,8 @@ static void brute(query *q)
     }
 }
 
-size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any)
+static size_t run_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any,
+                        int penalty)
 {
     collision *c = L->col;
     query q;
@@ -520,6 +561,7 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
     q.stop = 0;
     q.rec = 0;
     q.overflow = 0;
+    q.penalty = penalty;
     c->nodes_refit = c->volume_tests = c->narrow_tests = c->nodes_skipped = 0;
     if (L->t.nnodes == 0) return 0; /* everything welded to the world */
     if (mode == AQS_COLLIDE_FULL)
@@ -541,4 +583,14 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
         if (q.overflow || c->xused > c->xcap / 2) compact(L, c);
     }
     return q.count;
+}
+
+size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any)
+{
+    return run_query(L, mode, out, capacity, any, 0);
+}
+
+void broadphase_penalty(aqs_linkage *L)
+{
+    if (L->col->built && L->col->nshapes > 0) (void)run_query(L, AQS_COLLIDE_LAZY, NULL, 0, 0, 1);
 }

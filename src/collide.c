@@ -19,6 +19,13 @@ collision *collide_state(aqs_linkage *L)
     return L->col;
 }
 
+/* Contacts may have changed: penalty forces must be recomputed. */
+static void contacts_changed(aqs_linkage *L)
+{
+    broadphase_forget(L);
+    if (L->col && L->col->stiffness > 0.0) L->loads_dirty = 1;
+}
+
 void collide_free(aqs_linkage *L)
 {
     collision *c = L->col;
@@ -84,9 +91,19 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
     }
     c->shapes[c->nshapes] = *s;
     shape_bound(&c->shapes[c->nshapes]);
-    if (out) *out = c->nshapes;
     c->nshapes++;
     broadphase_reset(L); /* rebuilt at the next query */
+    if (L->finalized && c->stiffness > 0.0) {
+        /* penalty contact: build now, so that solving never allocates */
+        aqs_status st = broadphase_build(L, fn);
+        if (st != AQS_OK) {
+            c->nshapes--;
+            (void)broadphase_build(L, fn); /* as before, if memory allows; else at the next query */
+            return st;
+        }
+        L->loads_dirty = 1;
+    }
+    if (out) *out = c->nshapes - 1;
     return AQS_OK;
 }
 
@@ -192,7 +209,7 @@ AQS_API aqs_status aqs_body_set_collision_filter(aqs_linkage *L, int32_t body, u
         c->group[body] = group;
         c->mask[body] = mask;
     }
-    broadphase_forget(L);
+    contacts_changed(L);
     return AQS_OK;
 }
 
@@ -225,7 +242,7 @@ AQS_API aqs_status aqs_collision_exclude_pair(aqs_linkage *L, int32_t a, int32_t
     memmove(c->excl + pos + 1, c->excl + pos, (size_t)(c->nexcl - pos) * sizeof(uint64_t));
     c->excl[pos] = key;
     c->nexcl++;
-    broadphase_forget(L);
+    contacts_changed(L);
     return AQS_OK;
 }
 
@@ -239,7 +256,7 @@ AQS_API aqs_status aqs_linkage_set_collide_joined(aqs_linkage *L, int32_t enable
     if (!L->col && !enabled) return AQS_OK; /* the default: nothing to store */
     if (!(c = collide_state(L))) return oom(L, fn);
     c->joined = enabled;
-    broadphase_forget(L);
+    contacts_changed(L);
     return AQS_OK;
 }
 
@@ -298,5 +315,26 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *L, int32_t
     if (volume_tests) *volume_tests = c ? c->volume_tests : 0;
     if (narrow_tests) *narrow_tests = c ? c->narrow_tests : 0;
     if (nodes_skipped) *nodes_skipped = c ? c->nodes_skipped : 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stiffness)
+{
+    static const char fn[] = "aqs_linkage_set_contact_stiffness";
+    collision *c;
+    aqs_status st;
+    if (!L) return AQS_EINVAL;
+    if (!L->finalized)
+        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    if (!isfinite(stiffness) || stiffness < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: stiffness = %g must be finite and >= 0", fn, stiffness);
+    if (!L->col && stiffness == 0.0) return AQS_OK; /* the default: nothing to store */
+    if (!(c = collide_state(L))) return oom(L, fn);
+    if (c->nshapes > 0 && (st = broadphase_build(L, fn)) != AQS_OK) return st;
+    if (c->stiffness != stiffness) {
+        c->stiffness = stiffness;
+        L->loads_dirty = 1;
+        L->s.valid = 0;
+    }
     return AQS_OK;
 }

@@ -20,6 +20,7 @@ typedef struct collision {
     uint64_t *excl;         /* excluded body pairs, sorted keys (a + 1) << 32 | (b + 1), a < b */
     int32_t nexcl, excl_cap;
     int joined;             /* bodies joined by a joint may collide */
+    double stiffness;       /* penalty contact (0: off) */
 
     /* Built at the first query after finalize (and after shapes change). */
     int built;
@@ -65,5 +66,9 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn);
 /* Run a query (after broadphase_build): mode AQS_COLLIDE_*; contacts up to
  * capacity into out; any != 0 stops at the first contact. Returns the total. */
 size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any);
+/* Penalty contact (src/update.c, inside update_loads): a lazy query whose
+ * contacts add k depth n at their points to the rigid groups' comp_force,
+ * registering the groups as loaded. Needs the built data. */
+void broadphase_penalty(aqs_linkage *L);
 
 #endif

@@ -170,6 +170,7 @@ void update_loads(aqs_linkage *L)
         update_body_load_in_comp(L, b, &Pc, f);
         for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
     }
+    if (L->col && L->col->stiffness > 0.0) broadphase_penalty(L); /* contact forces */
     for (i = 0; i < m->nloaded_comps; i++) refresh_leaf(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
     L->loads_dirty = 0;
 }

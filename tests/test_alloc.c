@@ -398,6 +398,15 @@ static void scenario_collision(run *R, coll_results *out)
         NO_ALLOC(R, aqs_linkage_collide(L, i == 1 ? AQS_COLLIDE_BRUTE : AQS_COLLIDE_LAZY, out->c, 64, &n));
         NO_ALLOC(R, aqs_linkage_any_contact(L, &hit));
     }
+    /* penalty contact: set-up may allocate, steps do not; a shape added with
+     * penalty on builds at once */
+    CALL(R, L, aqs_linkage_set_contact_stiffness(L, 50.0));
+    NO_ALLOC(R, aqs_linkage_step(L, 0.05));
+    {
+        double r[3] = {0.5, 0, 0}, at[3] = {3.0, 0.2, 0};
+        SHAPE_CALL(R, L, aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_SPHERE, r, at, quat, NULL));
+    }
+    NO_ALLOC(R, aqs_linkage_step(L, 0.05));
     NO_ALLOC(R, aqs_linkage_collide(L, AQS_COLLIDE_FULL, out->c, 64, &out->n));
     NO_ALLOC(R, aqs_linkage_get_shape_count(L, &out->nshapes));
     aqs_linkage_destroy(L);

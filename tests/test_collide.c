@@ -242,6 +242,108 @@ static void test_late_shapes_and_no_state(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* Penalty contact, closed form: a pendulum (mass 1, centre of mass 0.5 m
+ * out, revolute about z) with a sphere of radius 0.1 at its tip (1, 0, 0)
+ * falls under gravity onto an obstacle box whose top face is at y = -0.1.
+ * Quasi-static steps converge to the rest state where the contact force
+ * k depth, applied at the contact point, balances gravity's torque:
+ * k depth x_p = m g 0.5 cos q (checked with the reported contact to 1e-9
+ * relative once qdd is below 1e-9), so depth = m g 0.5 / k up to the
+ * contact point's offset from the tip (|x_p - cos q| <= sqrt(2 r depth):
+ * checked to 2%). A user force on the body still acts (it is added to,
+ * not replaced by, the contact force). */
+static void test_penalty_rest(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    const double tip[3] = {1, 0, 0}, r[3] = {0.1, 0, 0}, half[3] = {0.2, 0.5, 0.2}, at[3] = {1.0, -0.6, 0};
+    const double g[3] = {0, -9.81, 0}, k = 1e4;
+    double q = 0, qdd = 1, pos[3], quat[4];
+    aqs_contact c;
+    size_t n = 0;
+    int step;
+    test_add_body(L, 1.0, 0.5, 0, 0, 0.01);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, O, Q1, ZAX, NULL), AQS_OK);
+    assert_int_equal(aqs_shape_add(L, 0, AQS_SHAPE_SPHERE, r, tip, Q1, NULL), AQS_OK);
+    assert_int_equal(aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_BOX, half, at, Q1, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, k), AQS_ESTATE);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, -1.0), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "stiffness = -1");
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, NAN), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, k), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    for (step = 0; step < 400; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_joint_get_acceleration(L, 0, &qdd, 1), AQS_OK);
+    assert_int_equal(aqs_joint_get_position(L, 0, &q, 1), AQS_OK);
+    assert_true(fabs(qdd) < 1e-9);
+    assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
+    assert_int_equal(n, 1);
+    assert_true(fabs(c.ny + 1.0) < 1e-6); /* from the sphere down into the box */
+    {
+        double torque_contact = k * c.depth * (c.px * (-c.ny) - c.py * (-c.nx)); /* (p x F)_z, F = -k d n */
+        double torque_gravity = 9.81 * 0.5 * cos(q);
+        assert_true(fabs(torque_contact - torque_gravity) <= 1e-9 * torque_gravity + 1e-9 * 0.26);
+        assert_true(fabs(c.depth - 9.81 * 0.5 / k) <= 0.02 * 9.81 * 0.5 / k);
+    }
+    assert_int_equal(aqs_body_get_pose_world(L, 0, pos, quat), AQS_OK);
+    /* a user force pressing the tip down by 10 N: the new rest depth adds 10 / k */
+    {
+        const double f[3] = {0, -10.0, 0}, pt[3] = {1, 0, 0};
+        assert_int_equal(aqs_body_set_force(L, 0, f, pt, NULL), AQS_OK);
+        for (step = 0; step < 400; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
+        assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
+        assert_true(fabs(c.depth - (9.81 * 0.5 + 10.0) / k) <= 0.02 * (9.81 * 0.5 + 10.0) / k);
+    }
+    /* off again: the pendulum falls through */
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, 0.0), AQS_OK);
+    for (step = 0; step < 50; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
+    assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
+    assert_true(c.depth > 3.0 * (9.81 * 0.5 + 10.0) / k);
+    aqs_linkage_destroy(L);
+}
+
+/* A chain of 4 links with tip spheres, hinged to the world, falls onto a
+ * floor (stiffness 300, dt 0.01: dt^2 k / I well inside the stable range of
+ * the quasi-static update) and comes to rest: max |qdd| below 1e-6 with
+ * three or more links in contact; adaptive steps reach the same rest state as exact ones (the
+ * same positions to 1e-6). */
+static void test_penalty_chain_rests(void **state)
+{
+    double qa[4], qe[4];
+    int pass;
+    for (pass = 0; pass < 2; pass++) {
+        aqs_linkage *L = test_new_linkage();
+        const double r[3] = {0.1, 0, 0}, tipp[3] = {1, 0, 0}, floor_half[3] = {10, 0.5, 10};
+        const double floor_at[3] = {3, -0.7, 0}, g[3] = {0, -9.81, 0};
+        double qdd[4], m = 0;
+        size_t n = 0;
+        int32_t i;
+        for (i = 0; i < 4; i++) {
+            double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+            test_add_body(L, 1.0, 0.5, 0, 0, 0.01);
+            assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, i - 1, i, pos, Q1, ZAX, NULL), AQS_OK);
+            assert_int_equal(aqs_shape_add(L, i, AQS_SHAPE_SPHERE, r, tipp, Q1, NULL), AQS_OK);
+        }
+        assert_int_equal(aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_BOX, floor_half, floor_at, Q1, NULL), AQS_OK);
+        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+        assert_int_equal(aqs_linkage_set_contact_stiffness(L, 300.0), AQS_OK);
+        if (pass == 1) assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-3), AQS_OK);
+        for (i = 0; i < 1500; i++) assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(L, qdd, 4), AQS_OK);
+        for (i = 0; i < 4; i++) m = fmax(m, fabs(qdd[i]));
+        assert_true(m < 1e-6);
+        assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, NULL, 0, &n), AQS_ESIZE);
+        assert_true(n >= 3);
+        assert_int_equal(aqs_linkage_get_positions(L, pass ? qa : qe, 4), AQS_OK);
+        aqs_linkage_destroy(L);
+    }
+    assert_true(test_max_abs_diff(qa, qe, 4) < 1e-6);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -250,6 +352,8 @@ int main(void)
         cmocka_unit_test(test_capacity),
         cmocka_unit_test(test_welded_shapes_follow),
         cmocka_unit_test(test_late_shapes_and_no_state),
+        cmocka_unit_test(test_penalty_rest),
+        cmocka_unit_test(test_penalty_chain_rests),
     };
     return cmocka_run_group_tests_name("collide", tests, NULL, NULL);
 }

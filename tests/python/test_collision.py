@@ -105,3 +105,26 @@ def test_errors_name_argument_and_leave_linkage_unchanged():
             L.collide("fast")
         assert L.shape_count == 3
         assert len(L.collide()) == 0
+
+
+def test_penalty_contact_rest_depth():
+    # A pendulum (m = 1, centre of mass at 0.5) with a tip sphere comes to rest
+    # on a box: k depth x = m g 0.5 cos q, so depth = m g 0.5 / k to within the
+    # contact point's offset from the tip (2%).
+    with aqs.Linkage() as L:
+        b = L.add_body(1.0, (0.5, 0, 0), [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01])
+        L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
+        L.add_shape(b, "sphere", [0.1], pos=(1, 0, 0))
+        L.add_shape(aqs.WORLD, "box", [0.2, 0.5, 0.2], pos=(1, -0.6, 0))
+        L.finalize()
+        L.set_gravity((0, -9.81, 0))
+        with pytest.raises(aqs.InvalidArgument, match="stiffness = -1"):
+            L.set_contact_stiffness(-1)
+        L.set_contact_stiffness(1e4)
+        for _ in range(400):
+            L.step(1e-5 ** 0.5)
+        L.solve()
+        assert abs(L.accelerations()[0]) < 1e-9
+        c = L.collide()
+        assert len(c) == 1
+        assert abs(c["depth"][0] - 9.81 * 0.5 / 1e4) < 0.02 * 9.81 * 0.5 / 1e4

@@ -710,6 +710,12 @@ class Linkage:
         self._call("aqs_linkage_any_contact", ctypes.byref(out))
         return bool(out.value)
 
+    def set_contact_stiffness(self, stiffness):
+        """Penalty contact (aqs_linkage_set_contact_stiffness): each contact pushes
+        its bodies apart with stiffness * depth along its normal, at every solve
+        and step; 0 (the default) turns it off. After finalize."""
+        self._call("aqs_linkage_set_contact_stiffness", float(stiffness))
+
     def collision_stats(self):
         """Work of the last collision query (aqs_linkage_get_collision_stats)."""
         values = [ctypes.c_int32() for _ in range(4)]

@@ -282,6 +282,7 @@ PROTOTYPES = {
                                        size_p]),
     "aqs_linkage_any_contact": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_get_collision_stats": (status_t, [linkage_p, int32_p, int32_p, int32_p, int32_p]),
+    "aqs_linkage_set_contact_stiffness": (status_t, [linkage_p, ctypes.c_double]),
 }
 
 # ---------------------------------------------------------------------------
