@@ -23,7 +23,10 @@ collision *collide_state(aqs_linkage *L)
 static void contacts_changed(aqs_linkage *L)
 {
     broadphase_forget(L);
-    if (L->col && L->col->stiffness > 0.0) L->loads_dirty = 1;
+    if (L->col && L->col->stiffness > 0.0) {
+        L->loads_dirty = 1;
+        L->s.valid = 0; /* the loads changed: no refine of the last solve */
+    }
 }
 
 void collide_free(aqs_linkage *L)
@@ -102,6 +105,7 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
             return st;
         }
         L->loads_dirty = 1;
+        L->s.valid = 0;
     }
     if (out) *out = c->nshapes - 1;
     return AQS_OK;

@@ -300,6 +300,13 @@ static void test_penalty_rest(void **state)
     for (step = 0; step < 50; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
     assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
     assert_true(c.depth > 3.0 * (9.81 * 0.5 + 10.0) / k);
+    /* with penalty on, a filter change changes the loads: no refine of the last solve */
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, k), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-3), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_refine(L, 1e-4), AQS_OK);
+    assert_int_equal(aqs_collision_exclude_pair(L, 0, AQS_WORLD), AQS_OK);
+    assert_int_equal(aqs_linkage_refine(L, 1e-6), AQS_ESTATE);
     aqs_linkage_destroy(L);
 }
 
