@@ -35,7 +35,7 @@ CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden -DAQS_BUILDING_L
 CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
 CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude \
                  -I/usr/include/eigen3 $(SANFLAGS)
-LDLIBS := -lm
+LDLIBS := -lccd -lm
 
 SRCS := $(sort $(wildcard src/*.c))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
@@ -47,11 +47,11 @@ C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.
 CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
-BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c bench/collide_bench.c)
+BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c) bench/collide_bench.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
-        deps demo bench bench-scaling bench-plots check-bench install clean
+        deps demo bench bench-scaling bench-plots bench-collide check-bench install clean
 
 all: lib
 lib: $(SHLIB) $(STLIB)
@@ -161,6 +161,7 @@ bench: $(AQS_BENCH)
 	$(AQS_BENCH) --scene molecule --joints 50000 $(BENCH_MOLECULE) \
 	    --out docs/bench/$(BENCH_SET)-molecule.jsonl
 	@$(MAKE) --no-print-directory bench-plots BENCH_SET=$(BENCH_SET)
+	@$(MAKE) --no-print-directory bench-collide
 
 # Scaling: molecule 10k..1M joints, N_f = 1, rel. joint 2^-19 (1M: ~12 GB, ~3 min).
 SCALING_SIZES ?= 10000 50000 200000 1000000
@@ -183,6 +184,10 @@ bench-plots: $(BENCH_DEPS_STAMP)
 check-bench: $(AQS_BENCH)
 	AQS_BENCH=$(abspath $(AQS_BENCH)) $(PYTHON) -m pytest -q -p no:cacheprovider \
 	    tests/bench/test_aqs_bench.py
+
+# Collision queries: lazy tree vs full tree vs brute force (docs/bench.md, "Collision").
+bench-collide: $(BUILD)/bench/collide_bench
+	$(BUILD)/bench/collide_bench
 
 clean:
 	rm -rf build

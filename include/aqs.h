@@ -388,6 +388,131 @@ AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *linkage, int32_t b
 AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *linkage, double *poses,
                                                     size_t n);
 
+/* ------------------------------------------------------------------------
+ * Collision: convex shapes on bodies, obstacles, contact queries (libccd)
+ *
+ * Shapes are attached to bodies (moving with them) or to AQS_WORLD (static
+ * obstacles), in any phase; queries run after finalize. A linkage without
+ * shapes allocates nothing for collision and pays nothing per step. Bodies
+ * welded together by fixed joints (one rigid group) never collide with each
+ * other, nor do bodies welded to the world with obstacles. See
+ * docs/collision.md for the model and its limits.
+ * ---------------------------------------------------------------------- */
+
+/** Shape types (fixed values). size[] per type, all finite and > 0: */
+#define AQS_SHAPE_SPHERE 0   /**< size[0] radius */
+#define AQS_SHAPE_CAPSULE 1  /**< size[0] radius, size[1] half-length of the segment along z */
+#define AQS_SHAPE_BOX 2      /**< size[0..2] half-extents along x, y, z */
+#define AQS_SHAPE_CYLINDER 3 /**< size[0] radius, size[1] half-height along z */
+#define AQS_SHAPE_HULL 4     /**< convex hull of points (aqs_shape_add_hull only) */
+
+/** Attach a shape to body (a body index, or AQS_WORLD for a static
+ *  obstacle). type: AQS_SHAPE_SPHERE..AQS_SHAPE_CYLINDER. size: (3), entries
+ *  unused by the type are ignored (may be anything finite). pos: (3) origin of
+ *  the shape frame in the body frame (world frame for AQS_WORLD), m. quat:
+ *  (4, w x y z) its orientation, unit within 1e-6, then normalized.
+ *  out_shape: receives the shape index (shapes of all bodies and obstacles
+ *  are numbered together from 0, in the order added; may be NULL).
+ *  Any phase. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_shape_add(aqs_linkage *linkage, int32_t body, int32_t type,
+                                 const double size[3], const double pos[3], const double quat[4],
+                                 int32_t *out_shape);
+
+/** Attach the convex hull of npoints points (npoints x 3, row-major, in the
+ *  shape frame; finite; at least 4 not all coplanar, relative to their
+ *  extent: 1e-9) to body, placed by pos and quat as in aqs_shape_add. The
+ *  points are copied. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_shape_add_hull(aqs_linkage *linkage, int32_t body, const double *points,
+                                      int32_t npoints, const double pos[3], const double quat[4],
+                                      int32_t *out_shape);
+
+/** Number of shapes (obstacles included). Any phase. */
+AQS_API aqs_status aqs_linkage_get_shape_count(const aqs_linkage *linkage, int32_t *count);
+
+/** Collision filter of a body (or of all obstacles with AQS_WORLD): two
+ *  shapes may touch only if (group_a & mask_b) and (group_b & mask_a) are
+ *  both non-zero. Default group 1, mask 0xFFFFFFFF. Any phase.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_body_set_collision_filter(aqs_linkage *linkage, int32_t body,
+                                                 uint32_t group, uint32_t mask);
+
+/** Never report contacts between body_a and body_b (either may be AQS_WORLD:
+ *  the obstacles; not both). Idempotent. Any phase.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_collision_exclude_pair(aqs_linkage *linkage, int32_t body_a,
+                                              int32_t body_b);
+
+/** Whether two bodies joined by a joint (parent and child) may collide:
+ *  0 (the default: they never do) or 1. Obstacles are never "joined".
+ *  Any phase. Returns AQS_OK, AQS_EINVAL. */
+AQS_API aqs_status aqs_linkage_set_collide_joined(aqs_linkage *linkage, int32_t enabled);
+
+/** One contact between two shapes. body_b = AQS_WORLD for an obstacle;
+ *  a's shape has the lower shape index when both are on bodies, and b is the
+ *  obstacle otherwise. depth >= 0: moving b by depth along the normal
+ *  (nx, ny, nz: unit, world frame, pointing from a towards b) separates them.
+ *  (px, py, pz): contact point, world frame. */
+typedef struct aqs_contact {
+    int32_t body_a;
+    int32_t body_b;
+    int32_t shape_a;
+    int32_t shape_b;
+    double depth;
+    double nx;
+    double ny;
+    double nz;
+    double px;
+    double py;
+    double pz;
+} aqs_contact;
+
+/** How aqs_linkage_collide searches (all return the same contacts):
+ *  LAZY (default) traverses the assembly tree, refitting only the nodes
+ *  whose joints moved and skipping subassemblies that were free of internal
+ *  contact at the last query and did not move since; FULL refits every node
+ *  and forgets what earlier queries learned; BRUTE tests all pairs of shapes
+ *  (reference and benchmark). */
+#define AQS_COLLIDE_LAZY 0
+#define AQS_COLLIDE_FULL 1
+#define AQS_COLLIDE_BRUTE 2
+
+/** All contacts at the current positions: self-collision and contacts with
+ *  obstacles. contacts: (capacity) filled with min(total, capacity)
+ *  contacts (may be NULL when capacity is 0). count: receives the total
+ *  number found (non-NULL). Returns AQS_OK; AQS_ESIZE when total > capacity
+ *  (the first capacity contacts are written and *count holds the total, so
+ *  the caller can size the array and call again); AQS_EINVAL, AQS_ESTATE
+ *  (not finalized), AQS_ENOMEM (first query: the per-node bounding volumes
+ *  are allocated). Order of contacts: unspecified. */
+AQS_API aqs_status aqs_linkage_collide(aqs_linkage *linkage, int32_t mode, aqs_contact *contacts,
+                                       size_t capacity, size_t *count);
+
+/** Whether any two shapes touch: *hit = 1 or 0. Stops at the first contact.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM (as above). */
+AQS_API aqs_status aqs_linkage_any_contact(aqs_linkage *linkage, int32_t *hit);
+
+/** Work of the last collide / any-contact query (each pointer may be NULL):
+ *  nodes_refit: bounding volumes recomputed; volume_tests: pairs of bounding
+ *  spheres tested; narrow_tests: pairs of shapes given to libccd (after a
+ *  shape-level sphere test); nodes_skipped: subassemblies skipped because
+ *  they were still free of internal contact. Returns AQS_OK, AQS_EINVAL. */
+AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *linkage,
+                                                   int32_t *nodes_refit, int32_t *volume_tests,
+                                                   int32_t *narrow_tests, int32_t *nodes_skipped);
+
+/** Penalty contact (docs/collision.md): with stiffness k > 0 (force per
+ *  unit depth, N/m), every solve and step first finds all contacts (a lazy
+ *  query) and applies, for each, the force k * depth along its normal at the
+ *  contact point: +k depth n on body b, -k depth n on body a (obstacles and
+ *  bodies welded to the world take nothing), on top of the loads set by the
+ *  caller, through the same load path. The forces do not depend on
+ *  accelerations. k = 0 (the default) turns it off. stiffness: finite,
+ *  >= 0. After finalize; builds the collision data (AQS_ENOMEM possible) so
+ *  that solving and stepping still allocate nothing. The statistics of
+ *  aqs_linkage_get_collision_stats then describe the last query of either
+ *  kind. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, double stiffness);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,6 +9,7 @@
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
+#include "collide.h"
 #include "dca.h"
 #include "linkage.h"
 #include "model.h"
@@ -173,6 +174,7 @@ static void free_solver(aqs_linkage *L)
 AQS_API void aqs_linkage_destroy(aqs_linkage *L)
 {
     if (!L) return;
+    collide_free(L);
     free_solver(L);
     lk_free(L, L->bodies);
     lk_free(L, L->loads);

@@ -158,6 +158,7 @@ struct aqs_linkage {
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
+    struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
 };
 
 /* Memory through the linkage's allocator. */

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "collide.h"
 #include "dca.h"
 #include "dense.h"
 #include "totalacc.h"
@@ -43,6 +44,7 @@ void update_node_poses(aqs_linkage *L, int32_t n)
         if (i != C->ka) P[ci++] = PA[i];
     for (i = 0; i < B->nh; i++)
         if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+    if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
 void update_all_poses(aqs_linkage *L)
@@ -166,6 +168,7 @@ void update_loads(aqs_linkage *L)
         update_body_load_in_comp(L, b, &Pc, f);
         for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
     }
+    if (L->col && L->col->stiffness > 0.0) broadphase_penalty(L); /* contact forces */
     for (i = 0; i < m->nloaded_comps; i++) refresh_leaf(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
     L->loads_dirty = 0;
 }

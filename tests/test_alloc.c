@@ -315,12 +315,181 @@ static void test_tolerance_allocation_fails(void **state)
     }
 }
 
+/* ---- Collision (src/collide.c, src/broadphase.c): shapes, filters and
+ * exclusions allocate when added; the first query after finalize allocates
+ * the per-node data; later queries, steps and a shapeless scene allocate
+ * nothing. A failed call leaves the shape count and the contacts as they
+ * were. */
+
+#define NCOLL 14
+
+typedef struct {
+    aqs_contact c[64];
+    size_t n;
+    int32_t nshapes;
+} coll_results;
+
+/* Like CALL, and the shape count must be unchanged by a failure. */
+#define SHAPE_CALL(R, L, expr)                                                                     \
+    do {                                                                                           \
+        int32_t ns0_, ns1_;                                                                        \
+        long before_ = (R)->cs->count;                                                             \
+        aqs_status st_;                                                                            \
+        assert_int_equal(aqs_linkage_get_shape_count((L), &ns0_), AQS_OK);                         \
+        st_ = (expr);                                                                              \
+        if ((R)->cs->fail_at > before_ && (R)->cs->fail_at <= (R)->cs->count) {                   \
+            assert_int_equal(st_, AQS_ENOMEM);                                                     \
+            test_assert_contains(aqs_linkage_last_error(L), "out of memory");                      \
+            assert_int_equal(aqs_linkage_get_shape_count((L), &ns1_), AQS_OK);                     \
+            assert_int_equal(ns1_, ns0_);                                                          \
+            (R)->failures++;                                                                       \
+            st_ = (expr);                                                                          \
+        }                                                                                          \
+        assert_int_equal(st_, AQS_OK);                                                             \
+    } while (0)
+
+static void scenario_collision(run *R, coll_results *out)
+{
+    aqs_linkage *L = NULL;
+    double com[3] = {0.3, 0, 0}, I[9] = {0.1, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
+    double pos[3] = {0.6, 0, 0}, quat[4] = {1, 0, 0, 0}, axis[3] = {0, 0, 1};
+    double sz[3] = {0.35, 0.2, 0.2}, sp[3] = {0.3, 0, 0}, g[3] = {0, -9.81, 0};
+    const double hull[15] = {0.3, 0, 0, -0.2, 0.25, 0, -0.2, -0.25, 0.1, 0, 0, 0.35, 0.05, 0.05, -0.3};
+    long before;
+    int32_t i, hit;
+    size_t n;
+    expected_user = R->cs;
+    before = R->cs->count;
+    if (aqs_linkage_create_with_allocator(alloc_fn, free_fn, R->cs, &L) != AQS_OK) {
+        assert_true(R->cs->fail_at > before && R->cs->fail_at <= R->cs->count);
+        R->failures++;
+        return;
+    }
+    for (i = 0; i < NCOLL; i++) {
+        CALL(R, L, aqs_body_add(L, 1.0, com, I, NULL));
+        CALL(R, L, aqs_joint_add(L, i == 5 ? AQS_JOINT_FIXED : AQS_JOINT_REVOLUTE, i - 1, i, pos,
+                                 quat, axis, NULL));
+        SHAPE_CALL(R, L, aqs_shape_add(L, i, i % 4, sz, sp, quat, NULL));
+        if (i % 3 == 0) SHAPE_CALL(R, L, aqs_shape_add_hull(L, i, hull, 5, sp, quat, NULL));
+    }
+    SHAPE_CALL(R, L, aqs_body_set_collision_filter(L, 3, 2u, 0xFFFFFFFDu));
+    for (i = 0; i < 10; i++) SHAPE_CALL(R, L, aqs_collision_exclude_pair(L, i, i + 3));
+    CALL(R, L, aqs_linkage_finalize(L));
+    /* an obstacle after finalize: rebuilt at the next query */
+    {
+        double big[3] = {3.0, 0.2, 3.0}, floor[3] = {2.0, -0.3, 0};
+        SHAPE_CALL(R, L, aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_BOX, big, floor, quat, NULL));
+    }
+    NO_ALLOC(R, aqs_linkage_set_gravity(L, g));
+    {
+        long b0 = R->cs->count;
+        aqs_status st = aqs_linkage_collide(L, AQS_COLLIDE_LAZY, out->c, 64, &out->n);
+        if (R->cs->fail_at > b0 && R->cs->fail_at <= R->cs->count) {
+            assert_int_equal(st, AQS_ENOMEM);
+            test_assert_contains(aqs_linkage_last_error(L), "aqs_linkage_collide");
+            test_assert_contains(aqs_linkage_last_error(L), "out of memory");
+            R->failures++;
+            st = aqs_linkage_collide(L, AQS_COLLIDE_LAZY, out->c, 64, &out->n);
+        }
+        assert_int_equal(st, AQS_OK);
+    }
+    for (i = 0; i < 3; i++) {
+        NO_ALLOC(R, aqs_linkage_step(L, 0.05));
+        NO_ALLOC(R, aqs_linkage_collide(L, i == 1 ? AQS_COLLIDE_BRUTE : AQS_COLLIDE_LAZY, out->c, 64, &n));
+        NO_ALLOC(R, aqs_linkage_any_contact(L, &hit));
+    }
+    /* penalty contact: set-up may allocate, steps do not; a shape added with
+     * penalty on builds at once */
+    CALL(R, L, aqs_linkage_set_contact_stiffness(L, 50.0));
+    NO_ALLOC(R, aqs_linkage_step(L, 0.05));
+    {
+        double r[3] = {0.5, 0, 0}, at[3] = {3.0, 0.2, 0};
+        SHAPE_CALL(R, L, aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_SPHERE, r, at, quat, NULL));
+    }
+    NO_ALLOC(R, aqs_linkage_step(L, 0.05));
+    NO_ALLOC(R, aqs_linkage_collide(L, AQS_COLLIDE_FULL, out->c, 64, &out->n));
+    NO_ALLOC(R, aqs_linkage_get_shape_count(L, &out->nshapes));
+    aqs_linkage_destroy(L);
+}
+
+static void test_collision_allocation_fails(void **state)
+{
+    counting_state cs;
+    coll_results ref, res;
+    run R;
+    long total, k;
+    (void)state;
+    memset(&cs, 0, sizeof cs);
+    memset(&R, 0, sizeof R);
+    memset(&ref, 0, sizeof ref);
+    R.cs = &cs;
+    R.mode = RETRY;
+    scenario_collision(&R, &ref);
+    total = cs.count;
+    assert_int_equal(R.failures, 0);
+    assert_int_equal(cs.live, 0);
+    assert_true(ref.n > 0 && ref.n < 64); /* contacts exist; the array held them all */
+    for (k = 1; k <= total; k++) {
+        memset(&cs, 0, sizeof cs);
+        memset(&R, 0, sizeof R);
+        memset(&res, 0, sizeof res);
+        cs.fail_at = k;
+        R.cs = &cs;
+        R.mode = RETRY;
+        scenario_collision(&R, &res);
+        assert_int_equal(R.failures, 1);
+        assert_int_equal(cs.live, 0);
+        if (k > 1) { /* the linkage was created: recovered to the same bits */
+            assert_int_equal(res.n, ref.n);
+            assert_int_equal(res.nshapes, ref.nshapes);
+            assert_memory_equal(res.c, ref.c, ref.n * sizeof(aqs_contact));
+        }
+    }
+}
+
+/* A scene without shapes pays nothing: no collision state, no allocation by
+ * steps or queries. */
+static void test_shapeless_scene_allocates_nothing(void **state)
+{
+    counting_state cs;
+    run RR, *R = &RR;
+    aqs_linkage *L = NULL;
+    double com[3] = {0.3, 0, 0}, I[9] = {0.1, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
+    double pos[3] = {0.6, 0, 0}, quat[4] = {1, 0, 0, 0}, axis[3] = {0, 0, 1}, g[3] = {0, -9.81, 0};
+    int32_t i, hit = -1, refit = -1;
+    size_t n = 99;
+    (void)state;
+    memset(&cs, 0, sizeof cs);
+    memset(R, 0, sizeof *R);
+    R->cs = &cs;
+    expected_user = &cs;
+    assert_int_equal(aqs_linkage_create_with_allocator(alloc_fn, free_fn, &cs, &L), AQS_OK);
+    for (i = 0; i < 8; i++) {
+        assert_int_equal(aqs_body_add(L, 1.0, com, I, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, i - 1, i, pos, quat, axis, NULL), AQS_OK);
+    }
+    NO_ALLOC(R, aqs_linkage_set_collide_joined(L, 0)); /* the default: stores nothing */
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    NO_ALLOC(R, aqs_linkage_set_gravity(L, g));
+    NO_ALLOC(R, aqs_linkage_step(L, 0.01));
+    NO_ALLOC(R, aqs_linkage_collide(L, AQS_COLLIDE_LAZY, NULL, 0, &n));
+    assert_int_equal(n, 0);
+    NO_ALLOC(R, aqs_linkage_any_contact(L, &hit));
+    assert_int_equal(hit, 0);
+    NO_ALLOC(R, aqs_linkage_get_collision_stats(L, &refit, NULL, NULL, NULL));
+    assert_int_equal(refit, 0);
+    aqs_linkage_destroy(L);
+    assert_int_equal(cs.live, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_no_leak),
         cmocka_unit_test(test_every_allocation_fails),
         cmocka_unit_test(test_tolerance_allocation_fails),
+        cmocka_unit_test(test_collision_allocation_fails),
+        cmocka_unit_test(test_shapeless_scene_allocates_nothing),
     };
     return cmocka_run_group_tests_name("alloc", tests, NULL, NULL);
 }

@@ -38,7 +38,7 @@ int main(void)
 C
 $cc -std=c99 -Wall -Werror $san $cflags "$stage/hello.c" -o "$stage/hello_shared" $libs -Wl,-rpath,"$root/lib"
 "$stage/hello_shared"
-$cc -std=c99 -Wall -Werror $san $cflags "$stage/hello.c" -o "$stage/hello_static" "$root/lib/libaqs.a" -lm
+$cc -std=c99 -Wall -Werror $san $cflags "$stage/hello.c" -o "$stage/hello_static" "$root/lib/libaqs.a" $(pkg-config --define-variable=prefix="$root" --libs --static aqs | sed "s/-laqs//")
 "$stage/hello_static" >/dev/null
 # The header compiles as C++ (extern "C") and as strict C99.
 printf '#include <aqs.h>\nint main() { return aqs_version() == AQS_VERSION_NUMBER ? 0 : 1; }\n' > "$stage/hello.cpp"

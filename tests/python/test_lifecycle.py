@@ -113,6 +113,10 @@ CALLS = [
     ("positions", ()), ("set_positions", ([0.0],)), ("joint_position", (0,)),
     ("set_joint_position", (0, 0.0)), ("constraint_forces", ()), ("joint_constraint_force", (0,)),
     ("body_pose", (0,)), ("body_poses", ()),
+    # collision
+    ("add_shape", (0, "sphere", [0.5])), ("add_hull", (0, np.eye(4, 3) + 0.1 * np.arange(12).reshape(4, 3))),
+    ("set_collision_filter", (0, 1, 1)), ("exclude_collision", (0, -1)), ("set_collide_joined", (True,)),
+    ("collide", ()), ("any_contact", ()), ("collision_stats", ()), ("set_contact_stiffness", (10.0,)),
 ]
 
 
@@ -127,7 +131,7 @@ def test_closed_linkage_raises_state_error(name, args):
 def test_closed_linkage_properties_raise_state_error():
     L = small_linkage()
     L.close()
-    for name in ("num_bodies", "num_joints", "nq", "nv", "last_error"):
+    for name in ("num_bodies", "num_joints", "nq", "nv", "last_error", "shape_count"):
         with pytest.raises(aqs.StateError):
             getattr(L, name)
 
@@ -135,7 +139,7 @@ def test_closed_linkage_properties_raise_state_error():
 def test_every_method_listed():
     public = {n for n in dir(aqs.Linkage) if not n.startswith("_")}
     listed = {c[0] for c in CALLS} | {"num_bodies", "num_joints", "nq", "nv", "last_error",
-                                      "close", "closed", "with_allocator"}
+                                      "close", "closed", "with_allocator", "shape_count"}
     assert public == listed
 
 

@@ -42,6 +42,8 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
+from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
+                   COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
 from ._errors import from_status as _from_status
 
 __all__ = [
@@ -54,6 +56,9 @@ __all__ = [
     "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
+    "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
+    "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
+    "CollisionStats",
 ]
 
 __version__ = "0.1.0"
@@ -65,6 +70,14 @@ library_path = _lib.path
 _INT32_MIN = -(2 ** 31)
 _INT32_MAX = 2 ** 31 - 1
 _F64 = np.float64
+
+#: numpy dtype of the contacts returned by Linkage.collide (the layout of struct aqs_contact).
+CONTACT_DTYPE = np.dtype([(name, np.int32 if ctype is ctypes.c_int32 else np.float64)
+                          for name, ctype in _lib.aqs_contact._fields_])
+assert CONTACT_DTYPE.itemsize == ctypes.sizeof(_lib.aqs_contact)
+CollisionStats = collections.namedtuple("CollisionStats",
+                                        "nodes_refit volume_tests narrow_tests nodes_skipped")
+CollisionStats.__doc__ = "Work of the last collision query (aqs_linkage_get_collision_stats)."
 
 Sizes = collections.namedtuple("Sizes", "bodies joints nq nv")
 Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (accelerations)."
@@ -608,3 +621,103 @@ class Linkage:
         out = _output(out, (self.sizes().bodies, 7), f)
         self._call(f, out, out.size)
         return out
+
+    # -- collision ---------------------------------------------------------------
+
+    def add_shape(self, body, kind, size, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)):
+        """Attach a convex shape to body (or aqs.WORLD: a static obstacle); returns
+        its shape index (aqs_shape_add). kind: "sphere" (size[0] radius),
+        "capsule" (radius, half-length along z), "box" (half-extents),
+        "cylinder" (radius, half-height along z), or an aqs.SHAPE_* constant.
+        size: up to 3 values (missing ones are 0, unused). pos, quat: the
+        shape frame in the body frame."""
+        f = "aqs_shape_add"
+        kind = _named(kind, SHAPES, f, "type")
+        size = np.ascontiguousarray(size, dtype=_F64).ravel()
+        if size.size > 3:
+            raise SizeError("%s: size has %d values, at most 3" % (f, size.size))
+        size = _array(np.concatenate([size, np.zeros(3 - size.size)]), f, "size", 3)
+        out = ctypes.c_int32()
+        self._call(f, _index(body, f, "body"), kind, size, _array(pos, f, "pos", 3),
+                   _array(quat, f, "quat", 4), ctypes.byref(out))
+        return out.value
+
+    def add_hull(self, body, points, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)):
+        """Attach the convex hull of points ((n, 3), n >= 4, not coplanar) to
+        body; returns its shape index (aqs_shape_add_hull)."""
+        f = "aqs_shape_add_hull"
+        points = _array(points, f, "points")
+        if points.size % 3:
+            raise SizeError("%s: points has %d values, not a multiple of 3" % (f, points.size))
+        out = ctypes.c_int32()
+        self._call(f, _index(body, f, "body"), points, points.size // 3,
+                   _array(pos, f, "pos", 3), _array(quat, f, "quat", 4), ctypes.byref(out))
+        return out.value
+
+    @property
+    def shape_count(self):
+        """Number of shapes, obstacles included (aqs_linkage_get_shape_count)."""
+        out = ctypes.c_int32()
+        self._call("aqs_linkage_get_shape_count", ctypes.byref(out))
+        return out.value
+
+    def set_collision_filter(self, body, group, mask):
+        """Collision group and mask of body (aqs.WORLD: the obstacles); two shapes
+        may touch only if group_a & mask_b and group_b & mask_a are both non-zero
+        (aqs_body_set_collision_filter). Defaults: group 1, mask 0xFFFFFFFF."""
+        f = "aqs_body_set_collision_filter"
+        for name, value in (("group", group), ("mask", mask)):
+            if not 0 <= operator.index(value) <= 0xFFFFFFFF:
+                raise RangeError("%s: %s = %d does not fit in uint32_t" % (f, name, value))
+        self._call(f, _index(body, f, "body"), group, mask)
+
+    def exclude_collision(self, body_a, body_b):
+        """Never report contacts between body_a and body_b (either may be aqs.WORLD)
+        (aqs_collision_exclude_pair)."""
+        f = "aqs_collision_exclude_pair"
+        self._call(f, _index(body_a, f, "body_a"), _index(body_b, f, "body_b"))
+
+    def set_collide_joined(self, enabled):
+        """Whether bodies joined by a joint may collide (default False)
+        (aqs_linkage_set_collide_joined)."""
+        self._call("aqs_linkage_set_collide_joined", 1 if enabled else 0)
+
+    def collide(self, mode="lazy"):
+        """All contacts at the current positions (aqs_linkage_collide), as a numpy
+        structured array of dtype aqs.CONTACT_DTYPE: body_a, body_b (aqs.WORLD for
+        an obstacle), shape_a, shape_b, depth, normal nx ny nz (unit, world, from
+        a towards b), point px py pz (world). mode: "lazy" (default), "full" or
+        "brute" (same contacts, different work)."""
+        f = "aqs_linkage_collide"
+        mode = _named(mode, COLLIDE_MODES, f, "mode")
+        count = ctypes.c_size_t(0)
+        capacity = 64
+        while True:
+            buffer = (_lib.aqs_contact * capacity)()
+            handle = self._h(f)
+            status = _c.aqs_linkage_collide(handle, mode, buffer, capacity, ctypes.byref(count))
+            if status == ESIZE and count.value > capacity:
+                capacity = count.value  # sized from the returned total, then asked again
+                continue
+            if status != OK:
+                raise _from_status(status, _c.aqs_linkage_last_error(handle).decode(errors="replace"))
+            break
+        return np.frombuffer(buffer, dtype=CONTACT_DTYPE, count=count.value).copy()
+
+    def any_contact(self):
+        """Whether any two shapes touch (aqs_linkage_any_contact)."""
+        out = ctypes.c_int32()
+        self._call("aqs_linkage_any_contact", ctypes.byref(out))
+        return bool(out.value)
+
+    def set_contact_stiffness(self, stiffness):
+        """Penalty contact (aqs_linkage_set_contact_stiffness): each contact pushes
+        its bodies apart with stiffness * depth along its normal, at every solve
+        and step; 0 (the default) turns it off. After finalize."""
+        self._call("aqs_linkage_set_contact_stiffness", float(stiffness))
+
+    def collision_stats(self):
+        """Work of the last collision query (aqs_linkage_get_collision_stats)."""
+        values = [ctypes.c_int32() for _ in range(4)]
+        self._call("aqs_linkage_get_collision_stats", *[ctypes.byref(v) for v in values])
+        return CollisionStats(*(v.value for v in values))

@@ -95,6 +95,31 @@ TREE_BUILDERS = {
     "bisection": TREE_BISECTION,
 }
 
+# Collision shapes (AQS_SHAPE_*) and query modes (AQS_COLLIDE_*).
+SHAPE_SPHERE = 0    # size[0] radius
+SHAPE_CAPSULE = 1   # size[0] radius, size[1] half-length along z
+SHAPE_BOX = 2       # size[0..2] half-extents
+SHAPE_CYLINDER = 3  # size[0] radius, size[1] half-height along z
+SHAPE_HULL = 4      # convex hull of points (add_hull)
+
+SHAPES = {
+    "sphere": SHAPE_SPHERE,
+    "capsule": SHAPE_CAPSULE,
+    "box": SHAPE_BOX,
+    "cylinder": SHAPE_CYLINDER,
+    "hull": SHAPE_HULL,
+}
+
+COLLIDE_LAZY = 0   # tree, refit and skip what did not move (default)
+COLLIDE_FULL = 1   # tree, everything refitted and re-tested
+COLLIDE_BRUTE = 2  # all pairs of shapes (reference)
+
+COLLIDE_MODES = {
+    "lazy": COLLIDE_LAZY,
+    "full": COLLIDE_FULL,
+    "brute": COLLIDE_BRUTE,
+}
+
 # ---------------------------------------------------------------------------
 # C types
 # ---------------------------------------------------------------------------
@@ -131,6 +156,28 @@ class aqs_solve_stats(ctypes.Structure):
 
 
 solve_stats_p = ctypes.POINTER(aqs_solve_stats)
+
+
+class aqs_contact(ctypes.Structure):
+    """struct aqs_contact, field for field."""
+
+    _fields_ = [
+        ("body_a", ctypes.c_int32),
+        ("body_b", ctypes.c_int32),   # WORLD for an obstacle
+        ("shape_a", ctypes.c_int32),
+        ("shape_b", ctypes.c_int32),
+        ("depth", ctypes.c_double),
+        ("nx", ctypes.c_double),      # unit normal from a towards b, world frame
+        ("ny", ctypes.c_double),
+        ("nz", ctypes.c_double),
+        ("px", ctypes.c_double),      # contact point, world frame
+        ("py", ctypes.c_double),
+        ("pz", ctypes.c_double),
+    ]
+
+
+contact_p = ctypes.POINTER(aqs_contact)
+size_p = ctypes.POINTER(ctypes.c_size_t)
 
 alloc_fn = ctypes.CFUNCTYPE(ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t)
 free_fn = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)
@@ -222,6 +269,20 @@ PROTOTYPES = {
     "aqs_joint_get_constraint_force": (status_t, [linkage_p, ctypes.c_int32, dout]),
     "aqs_body_get_pose_world": (status_t, [linkage_p, ctypes.c_int32, dout, dout]),
     "aqs_linkage_get_body_poses_world": (status_t, [linkage_p, dout_or_null, ctypes.c_size_t]),
+    # Collision
+    "aqs_shape_add": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_int32, din, din, din, int32_p]),
+    "aqs_shape_add_hull": (status_t, [linkage_p, ctypes.c_int32, din, ctypes.c_int32, din, din,
+                                      int32_p]),
+    "aqs_linkage_get_shape_count": (status_t, [linkage_p, int32_p]),
+    "aqs_body_set_collision_filter": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_uint32,
+                                                 ctypes.c_uint32]),
+    "aqs_collision_exclude_pair": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_int32]),
+    "aqs_linkage_set_collide_joined": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_collide": (status_t, [linkage_p, ctypes.c_int32, contact_p, ctypes.c_size_t,
+                                       size_p]),
+    "aqs_linkage_any_contact": (status_t, [linkage_p, int32_p]),
+    "aqs_linkage_get_collision_stats": (status_t, [linkage_p, int32_p, int32_p, int32_p, int32_p]),
+    "aqs_linkage_set_contact_stiffness": (status_t, [linkage_p, ctypes.c_double]),
 }
 
 # ---------------------------------------------------------------------------

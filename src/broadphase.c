@@ -1,0 +1,596 @@
+/* broadphase.c -- bounding spheres on the assembly tree, refitted lazily,
+ * and the top-down traversal of node pairs (self-collision and obstacles:
+ * the obstacles live in the world's leaf). The brute-force all-pairs query
+ * is here too, as the reference the tree query must reproduce exactly. */
+#include "collide.h"
+
+#include <math.h>
+#include <string.h>
+
+/* ------------------------------------------------------------ filters */
+
+static uint32_t body_group(const collision *c, int32_t b)
+{
+    if (b < 0) return c->world_group;
+    return b < c->nfilter ? c->group[b] : 1u;
+}
+
+static uint32_t body_mask(const collision *c, int32_t b)
+{
+    if (b < 0) return c->world_mask;
+    return b < c->nfilter ? c->mask[b] : 0xFFFFFFFFu;
+}
+
+static int excluded(const collision *c, int32_t a, int32_t b)
+{
+    uint64_t key;
+    int32_t lo = 0, hi = c->nexcl;
+    if (a > b) { int32_t t = a; a = b; b = t; }
+    key = ((uint64_t)(uint32_t)(a + 1) << 32) | (uint32_t)(b + 1);
+    while (lo < hi) {
+        int32_t mid = lo + (hi - lo) / 2;
+        if (c->excl[mid] < key) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < c->nexcl && c->excl[lo] == key;
+}
+
+/* Whether shapes i and j (on different rigid groups) may touch. */
+static int pair_allowed(const aqs_linkage *L, const collision *c, int32_t i, int32_t j)
+{
+    int32_t a = c->shapes[i].body, b = c->shapes[j].body;
+    if (!(body_group(c, a) & body_mask(c, b)) || !(body_group(c, b) & body_mask(c, a))) return 0;
+    if (!c->joined && a >= 0 && b >= 0 &&
+        (L->joints[L->m.parent_joint[a]].parent == b || L->joints[L->m.parent_joint[b]].parent == a))
+        return 0;
+    return c->nexcl == 0 || !excluded(c, a, b);
+}
+
+/* ------------------------------------------------------------ spheres */
+
+static double dist3(const double a[3], const double b[3])
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(vec3_dot(d, d));
+}
+
+/* Spheres (cx, rx), (cy, ry) in one frame may overlap: conservative by a
+ * relative 1e-9 of the radii and 1e-12 of the coordinates, for rounding in
+ * the transforms (squared distances: no square root). */
+static int spheres_overlap(const double cx[3], double rx, const double cy[3], double ry)
+{
+    double d0 = cx[0] - cy[0], d1 = cx[1] - cy[1], d2 = cx[2] - cy[2];
+    double r = (rx + ry) * (1.0 + 1e-9) +
+               1e-12 * (fabs(cx[0]) + fabs(cx[1]) + fabs(cx[2]) + fabs(cy[0]) + fabs(cy[1]) + fabs(cy[2]));
+    return d0 * d0 + d1 * d1 + d2 * d2 <= r * r;
+}
+
+/* Smallest sphere enclosing two spheres (radius < 0: empty). */
+static void merge(const double *s1, const double *s2, double *out)
+{
+    double d, R;
+    int i;
+    if (s1[3] < 0.0) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    if (s2[3] < 0.0) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    d = dist3(s1, s2);
+    if (d + s2[3] <= s1[3]) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    if (d + s1[3] <= s2[3]) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    R = 0.5 * (d + s1[3] + s2[3]);
+    for (i = 0; i < 3; i++) out[i] = s1[i] + (R - s1[3]) / d * (s2[i] - s1[i]);
+    out[3] = R * (1.0 + 1e-12);
+}
+
+/* ------------------------------------------------------------ frames */
+
+/* Pose of B's frame (the child frame of the principal joint) in C's frame,
+ * and B's world pose from C's. Same operations as src/update.c. */
+static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
+{
+    const tree *t = &L->t;
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+}
+
+/* World pose of node n's child b from n's world pose (cached Pk). */
+static void child_world(const collision *c, int32_t n, const pose *Wc, pose *Wb)
+{
+    pose_compose(Wc, &c->pk[n], Wb);
+}
+
+static void world_centre(const double *s, const pose *W, double out[3])
+{
+    mat3_vec(W->R, s, out);
+    out[0] += W->p[0];
+    out[1] += W->p[1];
+    out[2] += W->p[2];
+}
+
+/* ------------------------------------------------------------ state */
+
+void broadphase_reset(aqs_linkage *L)
+{
+    collision *c = L->col;
+    if (!c) return;
+    lk_free(L, c->shape_in);
+    lk_free(L, c->comp_start);
+    lk_free(L, c->comp_shapes);
+    lk_free(L, c->sph);
+    lk_free(L, c->moved);
+    lk_free(L, c->cached);
+    lk_free(L, c->ncont);
+    lk_free(L, c->xoff);
+    lk_free(L, c->xcnt);
+    lk_free(L, c->xpool[0]);
+    lk_free(L, c->xpool[1]);
+    lk_free(L, c->pk);
+    lk_free(L, c->wpose);
+    lk_free(L, c->wcen);
+    lk_free(L, c->wstamp);
+    lk_free(L, c->comp_world);
+    lk_free(L, c->placed);
+    lk_free(L, c->centres);
+    c->shape_in = NULL;
+    c->comp_start = c->comp_shapes = NULL;
+    c->sph = c->centres = NULL;
+    c->moved = c->cached = NULL;
+    c->ncont = c->xoff = c->xcnt = c->xpool[0] = c->xpool[1] = NULL;
+    c->xcap = c->xused = c->xcur = 0;
+    c->comp_world = c->pk = c->wpose = NULL;
+    c->wcen = NULL;
+    c->wstamp = NULL;
+    c->qstamp = 0;
+    c->placed = NULL;
+    c->built = 0;
+}
+
+void broadphase_forget(aqs_linkage *L)
+{
+    collision *c = L->col;
+    if (c && c->built && L->t.nnodes > 0) {
+        memset(c->cached, 0, (size_t)L->t.nnodes);
+        c->xused = 0;
+    }
+}
+
+void broadphase_node_moved(aqs_linkage *L, int32_t n)
+{
+    collision *c = L->col;
+    if (!c->built) return;
+    for (; n >= 0 && !c->moved[n]; n = L->t.nodes[n].parent) c->moved[n] = 1;
+}
+
+static int32_t comp_of_shape(const aqs_linkage *L, const shape_def *s)
+{
+    return s->body < 0 ? L->m.ncomp : L->m.comp_of_body[s->body];
+}
+
+/* Refit node n if it moved (children first). */
+static void refit(aqs_linkage *L, collision *c, int32_t n)
+{
+    const node *C = &L->t.nodes[n];
+    pose Pk;
+    double sb[4];
+    if (!c->moved[n]) return;
+    c->moved[n] = 0;
+    c->cached[n] = 0;
+    if (C->joint < 0) return; /* leaves are fixed at build */
+    c->nodes_refit++;
+    refit(L, c, C->a);
+    refit(L, c, C->b);
+    child_in_node(L, C, &c->pk[n]);
+    Pk = c->pk[n];
+    mat3_vec(Pk.R, c->sph + 4 * C->b, sb);
+    sb[0] += Pk.p[0];
+    sb[1] += Pk.p[1];
+    sb[2] += Pk.p[2];
+    sb[3] = c->sph[4 * C->b + 3];
+    merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
+}
+
+static void fit_leaf(aqs_linkage *L, collision *c, int32_t n)
+{
+    int32_t comp = L->t.nodes[n].comp, k, lo = c->comp_start[comp], hi = c->comp_start[comp + 1];
+    double *s = c->sph + 4 * n, ctr[3] = {0, 0, 0}, r = 0.0;
+    s[0] = s[1] = s[2] = 0.0;
+    s[3] = -1.0;
+    if (lo == hi) return;
+    for (k = lo; k < hi; k++) {
+        double w[3];
+        int32_t i = c->comp_shapes[k];
+        mat3_vec(c->shape_in[i].R, c->shapes[i].centre, w);
+        ctr[0] += (w[0] + c->shape_in[i].p[0]) / (hi - lo);
+        ctr[1] += (w[1] + c->shape_in[i].p[1]) / (hi - lo);
+        ctr[2] += (w[2] + c->shape_in[i].p[2]) / (hi - lo);
+    }
+    for (k = lo; k < hi; k++) {
+        double w[3], d;
+        int32_t i = c->comp_shapes[k];
+        mat3_vec(c->shape_in[i].R, c->shapes[i].centre, w);
+        w[0] += c->shape_in[i].p[0];
+        w[1] += c->shape_in[i].p[1];
+        w[2] += c->shape_in[i].p[2];
+        d = dist3(w, ctr) + c->shapes[i].radius;
+        if (d > r) r = d;
+    }
+    memcpy(s, ctr, sizeof ctr);
+    s[3] = r * (1.0 + 1e-12);
+}
+
+aqs_status broadphase_build(aqs_linkage *L, const char *fn)
+{
+    collision *c = L->col;
+    const model *m = &L->m;
+    int32_t nn = L->t.nnodes, ns = c->nshapes, i, n;
+    if (c->built) return AQS_OK;
+    c->shape_in = lk_calloc(L, (size_t)ns + 1, sizeof(pose));
+    c->comp_start = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
+    c->comp_shapes = lk_calloc(L, (size_t)ns + 1, sizeof(int32_t));
+    c->sph = lk_calloc(L, (size_t)nn * 4 + 1, sizeof(double));
+    c->moved = lk_calloc(L, (size_t)nn + 1, 1);
+    c->cached = lk_calloc(L, (size_t)nn + 1, 1);
+    c->ncont = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xoff = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xcnt = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->xcap = 4 * ns + 1024;
+    c->xpool[0] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
+    c->xpool[1] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
+    c->comp_world = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(pose));
+    c->pk = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
+    c->wpose = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
+    c->wcen = lk_calloc(L, (size_t)nn * 3 + 1, sizeof(double));
+    c->wstamp = lk_calloc(L, (size_t)nn + 1, sizeof(uint32_t));
+    c->placed = lk_calloc(L, (size_t)ns + 1, sizeof(placed_shape));
+    c->centres = lk_calloc(L, (size_t)ns * 3 + 1, sizeof(double));
+    if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->cached ||
+        !c->ncont || !c->xoff || !c->xcnt || !c->xpool[0] || !c->xpool[1] ||
+        !c->comp_world || !c->pk || !c->wpose || !c->wcen || !c->wstamp || !c->placed || !c->centres) {
+        broadphase_reset(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory (collision data of %d nodes, %d shapes)",
+                       fn, (int)nn, (int)ns);
+    }
+    /* Shapes grouped by rigid group, in index order within a group: count,
+     * prefix sums (start of each group), fill (start -> end), shift back. */
+    for (i = 0; i < ns; i++) c->comp_start[comp_of_shape(L, &c->shapes[i]) + 1]++;
+    for (i = 0; i <= m->ncomp; i++) c->comp_start[i + 1] += c->comp_start[i];
+    for (i = 0; i < ns; i++) c->comp_shapes[c->comp_start[comp_of_shape(L, &c->shapes[i])]++] = i;
+    for (i = m->ncomp + 1; i > 0; i--) c->comp_start[i] = c->comp_start[i - 1];
+    c->comp_start[0] = 0;
+    for (i = 0; i < ns; i++) {
+        const shape_def *s = &c->shapes[i];
+        if (s->body < 0) c->shape_in[i] = s->local;
+        else pose_compose(&m->body_in_comp[s->body], &s->local, &c->shape_in[i]);
+    }
+    for (n = 0; n < nn; n++) {
+        if (L->t.nodes[n].joint < 0) fit_leaf(L, c, n);
+        else c->moved[n] = 1;
+    }
+    c->built = 1;
+    c->nodes_refit = 0;
+    if (nn > 0) refit(L, c, L->t.root);
+    return AQS_OK;
+}
+
+/* ------------------------------------------------------------ queries */
+
+typedef struct {
+    aqs_linkage *L;
+    collision *c;
+    aqs_contact *out;
+    size_t cap, count;
+    int any, stop;
+    int rec;      /* record hits as cross pairs of the node being computed */
+    int penalty;  /* apply penalty forces instead of writing contacts */
+    int overflow; /* the pair pool ran full during this query: cache nothing more */
+} query;
+
+static int shapes_may_touch(const placed_shape *a, const double ca[3], const placed_shape *b,
+                            const double cb[3])
+{
+    return spheres_overlap(ca, a->s->radius, cb, b->s->radius);
+}
+
+static const pose *world(query *q, int32_t n);
+
+/* Force sign * k depth n at world point p on the rigid group of shape i's body. */
+static void push_group(query *q, int32_t i, double sign, double depth, const double n[3],
+                       const double p[3])
+{
+    aqs_linkage *L = q->L;
+    model *m = &L->m;
+    int32_t body = q->c->shapes[i].body, comp, k;
+    const pose *W;
+    double fw[3], f[3], r[3], d[3], mom[3];
+    if (body < 0 || (comp = m->comp_of_body[body]) == m->ncomp) return; /* fixed: takes nothing */
+    W = world(q, L->t.leaf_of_comp[comp]);
+    for (k = 0; k < 3; k++) {
+        fw[k] = sign * q->c->stiffness * depth * n[k];
+        d[k] = p[k] - W->p[k];
+    }
+    mat3_tvec(W->R, fw, f); /* in the group's frame, about its origin */
+    mat3_tvec(W->R, d, r);
+    vec3_cross(r, f, mom);
+    for (k = 0; k < 3; k++) {
+        m->comp_force[6 * comp + k] += mom[k];
+        m->comp_force[6 * comp + 3 + k] += f[k];
+    }
+    if (!m->comp_loaded[comp]) {
+        m->comp_loaded[comp] = 1;
+        m->loaded_comps[m->nloaded_comps++] = comp;
+    }
+}
+
+static void apply_penalty(query *q, int32_t a, int32_t b, double depth, const double n[3],
+                          const double p[3])
+{
+    push_group(q, a, -1.0, depth, n, p);
+    push_group(q, b, 1.0, depth, n, p);
+}
+
+/* Narrow phase of shapes i and j placed at pi, pj (sphere centres ci, cj):
+ * a is the lower index, or the body when the other is an obstacle. */
+static void test_shapes(query *q, int32_t i, const placed_shape *pi, const double ci[3], int32_t j,
+                        const placed_shape *pj, const double cj[3])
+{
+    collision *c = q->c;
+    double depth, nrm[3], pt[3];
+    int swap;
+    if (!pair_allowed(q->L, c, i, j)) return;
+    if (!shapes_may_touch(pi, ci, pj, cj)) return;
+    swap = c->shapes[i].body < 0 || (c->shapes[j].body >= 0 && j < i);
+    c->narrow_tests++;
+    if (!(swap ? narrow_contact(pj, pi, &depth, nrm, pt) : narrow_contact(pi, pj, &depth, nrm, pt)))
+        return;
+    if (q->penalty) {
+        apply_penalty(q, swap ? j : i, swap ? i : j, depth, nrm, pt);
+    } else if (q->count < q->cap) {
+        aqs_contact *o = &q->out[q->count];
+        o->shape_a = swap ? j : i;
+        o->shape_b = swap ? i : j;
+        o->body_a = c->shapes[o->shape_a].body;
+        o->body_b = c->shapes[o->shape_b].body;
+        o->depth = depth;
+        o->nx = nrm[0];
+        o->ny = nrm[1];
+        o->nz = nrm[2];
+        o->px = pt[0];
+        o->py = pt[1];
+        o->pz = pt[2];
+    }
+    q->count++;
+    if (q->any) q->stop = 1;
+    if (q->rec) {
+        if (c->xused < c->xcap) {
+            c->xpool[c->xcur][2 * c->xused] = i;
+            c->xpool[c->xcur][2 * c->xused + 1] = j;
+            c->xused++;
+        } else {
+            q->overflow = 1;
+        }
+    }
+}
+
+/* World pose of node n's frame and its sphere's world centre, memoized per
+ * query; computed from the parent's by the operations of all_comp_world. */
+static const pose *world(query *q, int32_t n)
+{
+    collision *c = q->c;
+    if (c->wstamp[n] != c->qstamp) {
+        int32_t p = q->L->t.nodes[n].parent;
+        const pose *Wp = world(q, p);
+        if (q->L->t.nodes[p].a == n) c->wpose[n] = *Wp;
+        else child_world(c, p, Wp, &c->wpose[n]);
+        world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
+        c->wstamp[n] = c->qstamp;
+    }
+    return &c->wpose[n];
+}
+
+static void leaf_pair(query *q, int32_t x, int32_t y)
+{
+    collision *c = q->c;
+    const pose *Wx = world(q, x), *Wy = world(q, y);
+    int32_t cx = q->L->t.nodes[x].comp, cy = q->L->t.nodes[y].comp, k, l;
+    for (k = c->comp_start[cx]; k < c->comp_start[cx + 1] && !q->stop; k++) {
+        int32_t i = c->comp_shapes[k];
+        placed_shape pi;
+        double ci[3];
+        narrow_place(&c->shapes[i], Wx, &c->shape_in[i], &pi);
+        narrow_centre(&pi, ci);
+        for (l = c->comp_start[cy]; l < c->comp_start[cy + 1] && !q->stop; l++) {
+            int32_t j = c->comp_shapes[l];
+            placed_shape pj;
+            double cj[3];
+            narrow_place(&c->shapes[j], Wy, &c->shape_in[j], &pj);
+            narrow_centre(&pj, cj);
+            test_shapes(q, i, &pi, ci, j, &pj, cj);
+        }
+    }
+}
+
+static void pair(query *q, int32_t x, int32_t y)
+{
+    collision *c = q->c;
+    const node *X = &q->L->t.nodes[x], *Y = &q->L->t.nodes[y];
+    if (q->stop || c->sph[4 * x + 3] < 0.0 || c->sph[4 * y + 3] < 0.0) return;
+    c->volume_tests++;
+    world(q, x);
+    world(q, y);
+    if (!spheres_overlap(c->wcen + 3 * x, c->sph[4 * x + 3], c->wcen + 3 * y, c->sph[4 * y + 3])) return;
+    if (X->joint < 0 && Y->joint < 0) {
+        leaf_pair(q, x, y);
+    } else if (Y->joint < 0 || (X->joint >= 0 && c->sph[4 * x + 3] >= c->sph[4 * y + 3])) {
+        pair(q, X->a, y);
+        pair(q, X->b, y);
+    } else {
+        pair(q, x, Y->a);
+        pair(q, x, Y->b);
+    }
+}
+
+/* Shape i placed at its rigid group's world frame, and its sphere centre. */
+static void place_shape(query *q, int32_t i, placed_shape *p, double ctr[3])
+{
+    collision *c = q->c;
+    const shape_def *s = &c->shapes[i];
+    int32_t comp = s->body < 0 ? q->L->m.ncomp : q->L->m.comp_of_body[s->body];
+    narrow_place(s, world(q, q->L->t.leaf_of_comp[comp]), &c->shape_in[i], p);
+    narrow_centre(p, ctr);
+}
+
+/* Node n did not move since its contacts were cached: test again only the
+ * cached pairs (same placements, so the same bits as a traversal). */
+static void replay(query *q, int32_t n)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    int32_t k;
+    if (q->stop || C->joint < 0 || c->ncont[n] == 0) return;
+    replay(q, C->a);
+    replay(q, C->b);
+    for (k = c->xoff[n]; k < c->xoff[n] + c->xcnt[n] && !q->stop; k++) {
+        int32_t i = c->xpool[c->xcur][2 * k], j = c->xpool[c->xcur][2 * k + 1];
+        placed_shape pi, pj;
+        double ci[3], cj[3];
+        place_shape(q, i, &pi, ci);
+        place_shape(q, j, &pj, cj);
+        test_shapes(q, i, &pi, ci, j, &pj, cj);
+    }
+}
+
+static int known(const collision *c, const aqs_linkage *L, int32_t n)
+{
+    return L->t.nodes[n].joint < 0 || c->sph[4 * n + 3] < 0.0 || c->cached[n];
+}
+
+static void self(query *q, int32_t n)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    size_t before = q->count;
+    int32_t off;
+    if (q->stop || C->joint < 0 || c->sph[4 * n + 3] < 0.0) return;
+    if (c->cached[n]) {
+        c->nodes_skipped++;
+        replay(q, n);
+        return;
+    }
+    self(q, C->a);
+    self(q, C->b);
+    off = c->xused;
+    q->rec = 1;
+    pair(q, C->a, C->b);
+    q->rec = 0;
+    if (!q->stop && !q->overflow && known(c, q->L, C->a) && known(c, q->L, C->b)) {
+        c->cached[n] = 1;
+        c->ncont[n] = (int32_t)(q->count - before);
+        c->xoff[n] = off;
+        c->xcnt[n] = c->xused - off;
+    }
+}
+
+/* Move the live cross pairs into the other pool (or forget every cache
+ * when they do not fit in half of it). */
+static void compact(aqs_linkage *L, collision *c)
+{
+    int32_t n, used = 0, *src = c->xpool[c->xcur], *dst = c->xpool[1 - c->xcur];
+    for (n = 0; n < L->t.nnodes; n++) {
+        if (!c->cached[n] || c->xcnt[n] == 0) continue;
+        if (used + c->xcnt[n] > c->xcap / 2) {
+            memset(c->cached, 0, (size_t)L->t.nnodes);
+            c->xused = 0;
+            return;
+        }
+        memcpy(dst + 2 * used, src + 2 * c->xoff[n], 2 * sizeof(int32_t) * (size_t)c->xcnt[n]);
+        c->xoff[n] = used;
+        used += c->xcnt[n];
+    }
+    c->xcur = 1 - c->xcur;
+    c->xused = used;
+}
+
+/* World poses of every rigid group, top-down, by the traversal's operations. */
+static void all_comp_world(const aqs_linkage *L, collision *c, int32_t n, const pose *W)
+{
+    const node *C = &L->t.nodes[n];
+    pose Wb;
+    if (C->joint < 0) {
+        c->comp_world[C->comp] = *W;
+        return;
+    }
+    child_world(c, n, W, &Wb);
+    all_comp_world(L, c, C->a, W);
+    all_comp_world(L, c, C->b, &Wb);
+}
+
+static void brute(query *q)
+{
+    aqs_linkage *L = q->L;
+    collision *c = q->c;
+    int32_t i, j, ns = c->nshapes;
+    pose I;
+    pose_identity(&I);
+    all_comp_world(L, c, L->t.root, &I);
+    for (i = 0; i < ns; i++) {
+        narrow_place(&c->shapes[i], &c->comp_world[comp_of_shape(L, &c->shapes[i])],
+                     &c->shape_in[i], &c->placed[i]);
+        narrow_centre(&c->placed[i], c->centres + 3 * i);
+    }
+    for (i = 0; i < ns && !q->stop; i++) {
+        const double *ci = c->centres + 3 * i, ri = c->shapes[i].radius;
+        int32_t comp = comp_of_shape(L, &c->shapes[i]);
+        for (j = i + 1; j < ns && !q->stop; j++) {
+            c->volume_tests++;
+            if (!spheres_overlap(ci, ri, c->centres + 3 * j, c->shapes[j].radius)) continue;
+            if (comp == comp_of_shape(L, &c->shapes[j])) continue;
+            test_shapes(q, i, &c->placed[i], ci, j, &c->placed[j], c->centres + 3 * j);
+        }
+    }
+}
+
+static size_t run_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any,
+                        int penalty)
+{
+    collision *c = L->col;
+    query q;
+    int32_t n;
+    q.L = L;
+    q.c = c;
+    q.out = out;
+    q.cap = capacity;
+    q.count = 0;
+    q.any = any;
+    q.stop = 0;
+    q.rec = 0;
+    q.overflow = 0;
+    q.penalty = penalty;
+    c->nodes_refit = c->volume_tests = c->narrow_tests = c->nodes_skipped = 0;
+    if (L->t.nnodes == 0) return 0; /* everything welded to the world */
+    if (mode == AQS_COLLIDE_FULL)
+        for (n = 0; n < L->t.nnodes; n++)
+            if (L->t.nodes[n].joint >= 0) c->moved[n] = 1;
+    refit(L, c, L->t.root);
+    if (mode == AQS_COLLIDE_BRUTE) {
+        brute(&q);
+    } else {
+        if (++c->qstamp == 0) { /* wrapped: forget every stamp */
+            memset(c->wstamp, 0, (size_t)L->t.nnodes * sizeof(uint32_t));
+            c->qstamp = 1;
+        }
+        n = L->t.root;
+        pose_identity(&c->wpose[n]);
+        world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
+        c->wstamp[n] = c->qstamp;
+        self(&q, n);
+        if (q.overflow || c->xused > c->xcap / 2) compact(L, c);
+    }
+    return q.count;
+}
+
+size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any)
+{
+    return run_query(L, mode, out, capacity, any, 0);
+}
+
+void broadphase_penalty(aqs_linkage *L)
+{
+    if (L->col->built && L->col->nshapes > 0) (void)run_query(L, AQS_COLLIDE_LAZY, NULL, 0, 0, 1);
+}

@@ -1,0 +1,450 @@
+/* test_broadphase.c -- the tree query (lazy and full) against brute force.
+ *
+ * Random linkages of 60, 400 and 2,000 bodies (revolute, prismatic,
+ * spherical, universal, fixed and free joints; 0 to 2 random shapes per body
+ * of every type; a few obstacles; random collision groups, masks and pair
+ * exclusions) are stepped 200 times by random adaptive and exact steps,
+ * with occasional position resets. After each step:
+ *  - the lazy tree query, the full tree query and the library's brute-force
+ *    all-pairs query must return exactly the same shape pairs, with depths,
+ *    normals and points equal to 1e-9 (they place the shapes by the same
+ *    operations, so they agree to rounding; any refit or skip bug shows up
+ *    as a missing or extra pair);
+ *  - on the smallest linkage, an independent brute force written here
+ *    (world poses from aqs_linkage_get_body_poses_world, filters re-derived
+ *    from the model: same rigid group, joined bodies, groups and masks,
+ *    exclusions; libccd on every pair) must find the same pairs (a pair
+ *    shallower than 1e-9 may be missing on one side: the poses differ by
+ *    rounding), and the same depths to 1e-5 for sphere and capsule pairs
+ *    (MPR's estimate moves by up to ~1e-6 under rounding-level changes of
+ *    deep off-centre overlaps, and jumps between face planes for polytopes,
+ *    so polytope depths are compared only in the bitwise-placed comparisons
+ *    above and in test_narrowphase.c).
+ * On the 2,000-body linkage the brute-force comparison runs every 20th
+ * step (its cost is quadratic); lazy against full runs every step. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "linkage.h"
+#include "narrowphase.h"
+
+#define MAXSH 3
+
+typedef struct {
+    int32_t n;           /* bodies */
+    int32_t *parent;     /* per body: parent body or AQS_WORLD */
+    int32_t *jtype;      /* per body: its joint's type */
+    int32_t *comp;       /* per body: the body its rigid group is named by (-1: the world) */
+    int32_t nshapes;
+    shape_def *shapes;   /* as the test sees them (body, type, size, local pose, pts) */
+    double *hullpts;
+    uint32_t *group, *mask;
+    int32_t *excl;       /* pairs (a, b) */
+    int32_t nexcl;
+    int joined;
+} scene;
+
+static const double hull_pts[] = {0.3, 0, 0, -0.2, 0.25, 0, -0.2, -0.25, 0.1, 0, 0, 0.35, 0.05, 0.05, -0.3};
+
+static aqs_linkage *build(scene *S, int32_t n, uint64_t seed, int joined)
+{
+    uint64_t st = seed;
+    aqs_linkage *L = test_new_linkage();
+    int32_t b, k;
+    S->n = n;
+    S->parent = calloc((size_t)n, sizeof(int32_t));
+    S->jtype = calloc((size_t)n, sizeof(int32_t));
+    S->comp = calloc((size_t)n, sizeof(int32_t));
+    S->shapes = calloc((size_t)n * MAXSH + 8, sizeof(shape_def));
+    S->group = calloc((size_t)n, sizeof(uint32_t));
+    S->mask = calloc((size_t)n, sizeof(uint32_t));
+    S->excl = calloc((size_t)n * 2, sizeof(int32_t));
+    S->nshapes = 0;
+    S->nexcl = 0;
+    S->joined = joined;
+    assert_int_equal(aqs_linkage_set_inertia_check(L, 0), AQS_OK);
+    for (b = 0; b < n; b++) {
+        double pos[3], q[4], ax[3];
+        int32_t t, p;
+        double u = test_uniform(&st, 0, 1);
+        test_add_body(L, 1.0, 0.1, 0, 0, 0.1);
+        p = b < 3 ? AQS_WORLD : (int32_t)(test_uniform(&st, 0, 1) * b);
+        if (b > 3 && test_uniform(&st, 0, 1) < 0.7) p = b - 1; /* mostly chains */
+        if (p == AQS_WORLD) t = b == 2 ? AQS_JOINT_FREE : AQS_JOINT_REVOLUTE;
+        else if (u < 0.45) t = AQS_JOINT_REVOLUTE;
+        else if (u < 0.6) t = AQS_JOINT_SPHERICAL;
+        else if (u < 0.72) t = AQS_JOINT_UNIVERSAL;
+        else if (u < 0.84) t = AQS_JOINT_PRISMATIC;
+        else t = AQS_JOINT_FIXED;
+        for (k = 0; k < 3; k++) pos[k] = test_uniform(&st, -0.8, 0.8);
+        if (p == AQS_WORLD) pos[0] = 4.0 * b;
+        test_random_quat(&st, q);
+        for (k = 0; k < 3; k++) ax[k] = test_uniform(&st, -1, 1);
+        assert_int_equal(aqs_joint_add(L, t, p, b, pos, q, ax, NULL), AQS_OK);
+        S->parent[b] = p;
+        S->jtype[b] = t;
+        S->comp[b] = t == AQS_JOINT_FIXED ? S->comp[p] : b;
+        /* shapes */
+        for (k = (int32_t)(test_uniform(&st, 0, 1) * 2.4); k > 0; k--) {
+            shape_def *s = &S->shapes[S->nshapes];
+            double sz[3], sp[3], sq[4];
+            int32_t type = (int32_t)(test_uniform(&st, 0, 1) * 5), id, j;
+            for (j = 0; j < 3; j++) {
+                sz[j] = test_uniform(&st, 0.05, 0.25);
+                sp[j] = test_uniform(&st, -0.3, 0.3);
+            }
+            test_random_quat(&st, sq);
+            if (type == AQS_SHAPE_HULL)
+                assert_int_equal(aqs_shape_add_hull(L, b, hull_pts, 5, sp, sq, &id), AQS_OK);
+            else
+                assert_int_equal(aqs_shape_add(L, b, type, sz, sp, sq, &id), AQS_OK);
+            assert_int_equal(id, S->nshapes);
+            memset(s, 0, sizeof *s);
+            s->type = type;
+            s->body = b;
+            memcpy(s->size, sz, sizeof sz);
+            if (type == AQS_SHAPE_HULL) {
+                s->pts = (double *)hull_pts;
+                s->npts = 5;
+            }
+            test_quat_matrix(sq, s->local.R);
+            memcpy(s->local.p, sp, sizeof sp);
+            shape_bound(s);
+            S->nshapes++;
+        }
+        S->group[b] = 1u;
+        S->mask[b] = 0xFFFFFFFFu;
+        if (test_uniform(&st, 0, 1) < 0.1) {
+            S->group[b] = 1u << (int)(test_uniform(&st, 0, 1) * 3);
+            S->mask[b] = (uint32_t)(test_uniform(&st, 0, 1) * 8);
+            assert_int_equal(aqs_body_set_collision_filter(L, b, S->group[b], S->mask[b]), AQS_OK);
+        }
+        if (b > 0 && test_uniform(&st, 0, 1) < 0.05) {
+            int32_t o = (int32_t)(test_uniform(&st, 0, 1) * b);
+            S->excl[2 * S->nexcl] = o;
+            S->excl[2 * S->nexcl + 1] = b;
+            S->nexcl++;
+            assert_int_equal(aqs_collision_exclude_pair(L, b, o), AQS_OK);
+        }
+    }
+    /* Obstacles: a few boxes and spheres along the bases. */
+    for (k = 0; k < 6; k++) {
+        shape_def *s = &S->shapes[S->nshapes];
+        double sz[3] = {1.0, 0.3, 1.5}, sp[3] = {2.0 * k, -0.8, 0.0}, sq[4] = {1, 0, 0, 0};
+        int32_t type = k % 2 ? AQS_SHAPE_SPHERE : AQS_SHAPE_BOX;
+        assert_int_equal(aqs_shape_add(L, AQS_WORLD, type, sz, sp, sq, NULL), AQS_OK);
+        memset(s, 0, sizeof *s);
+        s->type = type;
+        s->body = AQS_WORLD;
+        memcpy(s->size, sz, sizeof sz);
+        test_quat_matrix(sq, s->local.R);
+        memcpy(s->local.p, sp, sizeof sp);
+        shape_bound(s);
+        S->nshapes++;
+    }
+    assert_int_equal(aqs_linkage_set_collide_joined(L, joined), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    {
+        double g[3] = {0, -9.81, 0};
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    }
+    for (b = 0; b < n; b += 7) {
+        double f[3] = {test_uniform(&st, -5, 5), test_uniform(&st, -5, 5), test_uniform(&st, -5, 5)};
+        assert_int_equal(aqs_body_set_force(L, b, f, NULL, NULL), AQS_OK);
+    }
+    return L;
+}
+
+static void free_scene(scene *S)
+{
+    free(S->parent);
+    free(S->jtype);
+    free(S->comp);
+    free(S->shapes);
+    free(S->group);
+    free(S->mask);
+    free(S->excl);
+}
+
+static int cmp_contact(const void *x, const void *y)
+{
+    const aqs_contact *a = x, *b = y;
+    if (a->shape_a != b->shape_a) return a->shape_a < b->shape_a ? -1 : 1;
+    if (a->shape_b != b->shape_b) return a->shape_b < b->shape_b ? -1 : 1;
+    return 0;
+}
+
+/* Query with mode into a fresh sorted array; returns the count. */
+static size_t query(aqs_linkage *L, int32_t mode, aqs_contact **out)
+{
+    size_t count = 0, again = 0;
+    aqs_status st = aqs_linkage_collide(L, mode, NULL, 0, &count);
+    assert_true(st == AQS_OK || st == AQS_ESIZE);
+    *out = calloc(count + 1, sizeof(aqs_contact));
+    assert_int_equal(aqs_linkage_collide(L, mode, *out, count, &again), AQS_OK);
+    assert_int_equal(again, count);
+    qsort(*out, count, sizeof(aqs_contact), cmp_contact);
+    return count;
+}
+
+static void same_contacts(const aqs_contact *a, size_t na, const aqs_contact *b, size_t nb)
+{
+    size_t i;
+    assert_int_equal(na, nb);
+    for (i = 0; i < na; i++) {
+        const double va[7] = {a[i].depth, a[i].nx, a[i].ny, a[i].nz, a[i].px, a[i].py, a[i].pz};
+        const double vb[7] = {b[i].depth, b[i].nx, b[i].ny, b[i].nz, b[i].px, b[i].py, b[i].pz};
+        assert_int_equal(a[i].shape_a, b[i].shape_a);
+        assert_int_equal(a[i].shape_b, b[i].shape_b);
+        assert_int_equal(a[i].body_a, b[i].body_a);
+        assert_int_equal(a[i].body_b, b[i].body_b);
+        assert_true(test_max_abs_diff(va, vb, 7) <= 1e-9);
+    }
+}
+
+/* The test's own brute force: public world poses, its own filters. */
+static int allowed(const scene *S, int32_t i, int32_t j)
+{
+    int32_t a = S->shapes[i].body, b = S->shapes[j].body, k;
+    uint32_t ga = a < 0 ? 1u : S->group[a], ma = a < 0 ? 0xFFFFFFFFu : S->mask[a];
+    uint32_t gb = b < 0 ? 1u : S->group[b], mb = b < 0 ? 0xFFFFFFFFu : S->mask[b];
+    int32_t ca = a < 0 ? -1 : S->comp[a], cb = b < 0 ? -1 : S->comp[b];
+    if (ca == cb) return 0;
+    if (!(ga & mb) || !(gb & ma)) return 0;
+    if (!S->joined && a >= 0 && b >= 0 && (S->parent[a] == b || S->parent[b] == a)) return 0;
+    for (k = 0; k < S->nexcl; k++)
+        if ((S->excl[2 * k] == a && S->excl[2 * k + 1] == b) || (S->excl[2 * k] == b && S->excl[2 * k + 1] == a))
+            return 0;
+    return 1;
+}
+
+static void place_world(const scene *S, const double *poses, int32_t i, placed_shape *p)
+{
+    const shape_def *s = &S->shapes[i];
+    pose body;
+    p->s = s;
+    if (s->body < 0) {
+        p->world = s->local;
+        return;
+    }
+    test_quat_matrix(poses + 7 * s->body + 3, body.R);
+    memcpy(body.p, poses + 7 * s->body, 3 * sizeof(double));
+    test_mat3_mul(body.R, s->local.R, p->world.R);
+    {
+        int k;
+        for (k = 0; k < 3; k++)
+            p->world.p[k] = body.p[k] + body.R[3 * k] * s->local.p[0] + body.R[3 * k + 1] * s->local.p[1] +
+                            body.R[3 * k + 2] * s->local.p[2];
+    }
+}
+
+static void independent_check(const scene *S, aqs_linkage *L, const aqs_contact *lib, size_t nlib)
+{
+    double *poses = calloc((size_t)S->n * 7, sizeof(double));
+    placed_shape *pl = calloc((size_t)S->nshapes, sizeof(placed_shape));
+    char *matched = calloc(nlib + 1, 1);
+    int32_t i, j;
+    size_t found = 0, k;
+    assert_int_equal(aqs_linkage_get_body_poses_world(L, poses, (size_t)S->n * 7), AQS_OK);
+    for (i = 0; i < S->nshapes; i++) place_world(S, poses, i, &pl[i]);
+    for (i = 0; i < S->nshapes; i++)
+        for (j = i + 1; j < S->nshapes; j++) {
+            double d, n[3], p[3];
+            int32_t a = i, b = j;
+            if (!allowed(S, i, j)) continue;
+            if (S->shapes[i].body < 0) { a = j; b = i; }
+            if (!narrow_contact(&pl[a], &pl[b], &d, n, p)) continue;
+            /* find it in the library's list */
+            for (k = 0; k < nlib; k++)
+                if (lib[k].shape_a == a && lib[k].shape_b == b) break;
+            if (k == nlib) {
+                if (d > 1e-9) {
+                    print_error("pair %d %d (depth %g) missing from the library's contacts\n", (int)a, (int)b, d);
+                    fail();
+                }
+                continue;
+            }
+            found++;
+            matched[k] = 1;
+            /* MPR's depth moves with rounding: continuously (to ~1e-6 measured)
+             * for smooth pairs, in jumps between the planes of adjacent faces
+             * for polytopes (docs/collision.md). Depths are compared for
+             * sphere and capsule pairs only. */
+            if (S->shapes[a].type <= AQS_SHAPE_CAPSULE && S->shapes[b].type <= AQS_SHAPE_CAPSULE &&
+                fabs(lib[k].depth - d) > 1e-5) {
+                print_error("pair %d %d: depth %.17g here, %.17g in the library\n", (int)a, (int)b, d,
+                            lib[k].depth);
+                fail();
+            }
+        }
+    /* Every library contact deeper than 1e-9 was found here. */
+    for (k = 0; k < nlib; k++) assert_true(matched[k] || lib[k].depth <= 1e-9);
+    assert_true(found <= nlib);
+    free(matched);
+    free(poses);
+    free(pl);
+}
+
+/* Scale dt so that the largest joint increment dt^2 |qdd| is about h. */
+static double step_dt(aqs_linkage *L, double h)
+{
+    int32_t nv;
+    double *qdd, m = 0.0;
+    int32_t i;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
+    qdd = calloc((size_t)nv, sizeof(double));
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qdd, (size_t)nv), AQS_OK);
+    for (i = 0; i < nv; i++) m = fmax(m, fabs(qdd[i]));
+    free(qdd);
+    return m > 0.0 ? sqrt(h / m) : 1.0;
+}
+
+static void differential(int32_t n, uint64_t seed, int joined, int brute_every, int independent)
+{
+    scene S;
+    aqs_linkage *L = build(&S, n, seed, joined);
+    uint64_t st = seed * 7 + 1;
+    int step, total_contacts = 0, skipped = 0;
+    for (step = 0; step <= 200; step++) {
+        aqs_contact *lazy, *full, *bf;
+        size_t nl, nf, nb;
+        int32_t refit, vt, nt, sk;
+        if (step > 0) {
+            double u = test_uniform(&st, 0, 1);
+            if (u < 0.5) {
+                assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1.0 / 512), AQS_OK);
+            } else {
+                assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+            }
+            if (u > 0.97) { /* a bulk position reset to small random angles */
+                int32_t nq, j;
+                double *q;
+                assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, NULL), AQS_OK);
+                q = calloc((size_t)nq, sizeof(double));
+                assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
+                for (j = 0; j < S.n; j++) {
+                    int32_t off, jn;
+                    assert_int_equal(aqs_joint_get_layout(L, j, &off, &jn, NULL, NULL), AQS_OK);
+                    if (jn == 1) q[off] += test_uniform(&st, -0.3, 0.3);
+                }
+                assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
+                free(q);
+            } else if (u > 0.94) { /* one joint moved by hand */
+                int32_t j = (int32_t)(test_uniform(&st, 0, 1) * S.n), off, jn;
+                if (S.jtype[j] == AQS_JOINT_REVOLUTE) {
+                    double q = test_uniform(&st, -1, 1);
+                    assert_int_equal(aqs_joint_get_layout(L, j, &off, &jn, NULL, NULL), AQS_OK);
+                    assert_int_equal(aqs_joint_set_position(L, j, &q, 1), AQS_OK);
+                }
+            } else {
+                assert_int_equal(aqs_linkage_step(L, step_dt(L, 0.02)), AQS_OK);
+            }
+            /* skip the query now and then: moves accumulate between queries */
+            if (test_uniform(&st, 0, 1) < 0.2) continue;
+        }
+        nl = query(L, AQS_COLLIDE_LAZY, &lazy);
+        assert_int_equal(aqs_linkage_get_collision_stats(L, &refit, &vt, &nt, &sk), AQS_OK);
+        skipped += sk;
+        nf = query(L, AQS_COLLIDE_FULL, &full);
+        same_contacts(lazy, nl, full, nf);
+        if (step % brute_every == 0) {
+            nb = query(L, AQS_COLLIDE_BRUTE, &bf);
+            same_contacts(lazy, nl, bf, nb);
+            if (independent) independent_check(&S, L, bf, nb);
+            free(bf);
+        }
+        {
+            int32_t hit = -1;
+            assert_int_equal(aqs_linkage_any_contact(L, &hit), AQS_OK);
+            assert_int_equal(hit, nl > 0);
+        }
+        total_contacts += (int)nl;
+        free(lazy);
+        free(full);
+    }
+    /* The scenes are dense enough to test something, and the lazy queries did skip. */
+    print_message("%d bodies: %d contacts over the queries, %d subassemblies skipped\n", (int)n, total_contacts, skipped);
+    assert_true(total_contacts > 200);
+    assert_true(skipped > 0);
+    aqs_linkage_destroy(L);
+    free_scene(&S);
+}
+
+static void test_differential_60(void **state)
+{
+    differential(60, 101, 0, 1, 1);
+    differential(60, 102, 1, 1, 1);
+}
+
+static void test_differential_400(void **state) { differential(400, 103, 0, 1, 0); }
+
+static void test_differential_2000(void **state) { differential(2000, 104, 0, 20, 0); }
+
+/* A query right after another, with nothing moved, refits nothing. */
+static void test_idle_query_refits_nothing(void **state)
+{
+    scene S;
+    aqs_linkage *L = build(&S, 200, 105, 0);
+    aqs_contact *c;
+    int32_t refit = -1, vt, nt, sk;
+    size_t n1 = query(L, AQS_COLLIDE_LAZY, &c);
+    free(c);
+    assert_int_equal(query(L, AQS_COLLIDE_LAZY, &c), n1);
+    free(c);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &refit, &vt, &nt, &sk), AQS_OK);
+    assert_int_equal(refit, 0);
+    assert_true(sk > 0);
+    aqs_linkage_destroy(L);
+    free_scene(&S);
+}
+
+/* More contacts than the cache of contact pairs holds (4 per shape + 1024):
+ * the lazy query must still agree with brute force while it overflows and
+ * forgets its caches. 12 bodies with 12 spheres of radius 2 each, all
+ * overlapping: about 9,500 contacts for 144 shapes. */
+static void test_cache_overflow(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    const double q1[4] = {1, 0, 0, 0}, zax[3] = {0, 0, 1}, g[3] = {0, -9.81, 0};
+    int32_t b, k, step;
+    uint64_t st = 9;
+    for (b = 0; b < 12; b++) {
+        double pos[3] = {b ? 0.3 : 0.0, 0, 0};
+        test_add_body(L, 1.0, 0.2, 0, 0, 0.1);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, b - 1, b, pos, q1, zax, NULL), AQS_OK);
+        for (k = 0; k < 12; k++) {
+            double sz[3] = {2.0, 0, 0}, at[3] = {test_uniform(&st, -0.2, 0.2), test_uniform(&st, -0.2, 0.2), 0};
+            assert_int_equal(aqs_shape_add(L, b, AQS_SHAPE_SPHERE, sz, at, q1, NULL), AQS_OK);
+        }
+    }
+    assert_int_equal(aqs_linkage_set_collide_joined(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1.0 / 64), AQS_OK);
+    for (step = 0; step < 6; step++) {
+        aqs_contact *lazy, *bf;
+        size_t nl = query(L, AQS_COLLIDE_LAZY, &lazy), nb = query(L, AQS_COLLIDE_BRUTE, &bf);
+        assert_true(nl > 4 * 144 + 1024);
+        same_contacts(lazy, nl, bf, nb);
+        free(lazy);
+        free(bf);
+        assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    }
+    aqs_linkage_destroy(L);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_differential_60),
+        cmocka_unit_test(test_differential_400),
+        cmocka_unit_test(test_differential_2000),
+        cmocka_unit_test(test_idle_query_refits_nothing),
+        cmocka_unit_test(test_cache_overflow),
+    };
+    return cmocka_run_group_tests_name("broadphase", tests, NULL, NULL);
+}

@@ -1,0 +1,385 @@
+/* test_narrowphase.c -- libccd MPR through src/narrowphase.c against closed
+ * forms: sphere-sphere, sphere-box, capsule-capsule, box-box face / edge /
+ * corner, cylinder and hull, under random rigid motions of the pair; touching
+ * and separated by 1e-12; size ratios of 1e4; degenerate cases (identical
+ * shapes, touching faces) give finite, defined answers. The configurations
+ * put the minimum-translation direction on the line of the shapes' centres,
+ * where MPR's depth is exact; off that line MPR's depth is an approximation
+ * (docs/collision.md).
+ *
+ * Tolerances: MPR refines the portal to 1e-12 of the pair's size
+ * (src/narrowphase.c), so depths and normals are checked to 1e-9 of the size
+ * (rounding of the random rigid motions included, about 1e-15 per
+ * operation). Normals: 1e-9 between flat faces; on a curved surface of
+ * radius r a direction error e costs only r e^2 / 2 of depth, so a portal
+ * tolerance tau leaves normals known to about sqrt(2 tau / r), 1.4e-6 here:
+ * checked to 1e-5. Contact points must lie inside both shapes (closed-form
+ * inside tests), inflated by the same tolerance. */
+#include "testutil.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "narrowphase.h"
+
+#define PI 3.14159265358979323846
+
+static void make(shape_def *s, int32_t type, double a, double b, double c)
+{
+    memset(s, 0, sizeof *s);
+    s->type = type;
+    s->size[0] = a;
+    s->size[1] = b;
+    s->size[2] = c;
+    shape_bound(s);
+}
+
+/* A rigid motion of the whole pair: world = M * local. */
+typedef struct {
+    double R[9], p[3];
+} motion;
+
+static void random_motion(uint64_t *st, motion *M, double spread)
+{
+    double q[4];
+    test_random_quat(st, q);
+    test_quat_matrix(q, M->R);
+    M->p[0] = test_uniform(st, -spread, spread);
+    M->p[1] = test_uniform(st, -spread, spread);
+    M->p[2] = test_uniform(st, -spread, spread);
+}
+
+static void identity_motion(motion *M)
+{
+    memset(M, 0, sizeof *M);
+    M->R[0] = M->R[4] = M->R[8] = 1.0;
+}
+
+static void apply_dir(const motion *M, const double v[3], double out[3])
+{
+    int i;
+    for (i = 0; i < 3; i++) out[i] = M->R[3 * i] * v[0] + M->R[3 * i + 1] * v[1] + M->R[3 * i + 2] * v[2];
+}
+
+/* Place s with local rotation Rl (NULL: identity) and position pl, then move by M. */
+static void place(placed_shape *ps, const shape_def *s, const motion *M, const double *Rl,
+                  double x, double y, double z)
+{
+    static const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double pl[3] = {x, y, z}, w[3];
+    ps->s = s;
+    test_mat3_mul(M->R, Rl ? Rl : I, ps->world.R);
+    apply_dir(M, pl, w);
+    ps->world.p[0] = w[0] + M->p[0];
+    ps->world.p[1] = w[1] + M->p[1];
+    ps->world.p[2] = w[2] + M->p[2];
+}
+
+/* Closed-form distance outside a shape (<= 0 inside), shape frame. */
+static double outside(const placed_shape *ps, const double x[3])
+{
+    const shape_def *s = ps->s;
+    double d[3], l[3], e, r;
+    int i;
+    for (i = 0; i < 3; i++) d[i] = x[i] - ps->world.p[i];
+    for (i = 0; i < 3; i++) l[i] = ps->world.R[i] * d[0] + ps->world.R[3 + i] * d[1] + ps->world.R[6 + i] * d[2];
+    switch (s->type) {
+    case AQS_SHAPE_SPHERE: return sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]) - s->size[0];
+    case AQS_SHAPE_CAPSULE:
+        e = fmax(-s->size[1], fmin(s->size[1], l[2]));
+        return sqrt(l[0] * l[0] + l[1] * l[1] + (l[2] - e) * (l[2] - e)) - s->size[0];
+    case AQS_SHAPE_BOX:
+        r = -1e300;
+        for (i = 0; i < 3; i++) r = fmax(r, fabs(l[i]) - s->size[i]);
+        return r;
+    case AQS_SHAPE_CYLINDER:
+        return fmax(sqrt(l[0] * l[0] + l[1] * l[1]) - s->size[0], fabs(l[2]) - s->size[1]);
+    default: return -1.0; /* hulls: not checked */
+    }
+}
+
+/* Contact of a and b must exist with the given depth and normal (normal_local
+ * given before the motion M) and a point inside both shapes. */
+static void expect_contact(const placed_shape *a, const placed_shape *b, const motion *M,
+                           double depth, const double normal_local[3])
+{
+    double dep, n[3], p[3], nw[3], scale = a->s->radius + b->s->radius, tol = 1e-9 * scale;
+    int flat = (a->s->type == AQS_SHAPE_BOX || a->s->type == AQS_SHAPE_HULL) &&
+               (b->s->type == AQS_SHAPE_BOX || b->s->type == AQS_SHAPE_HULL);
+    assert_int_equal(narrow_contact(a, b, &dep, n, p), 1);
+    apply_dir(M, normal_local, nw);
+    if (fabs(dep - depth) > tol || test_max_abs_diff(n, nw, 3) > (flat ? 1e-9 : 1e-5)) {
+        print_error("depth %.17g (want %.17g), normal %g %g %g (want %g %g %g)\n", dep, depth, n[0],
+                    n[1], n[2], nw[0], nw[1], nw[2]);
+        fail();
+    }
+    assert_true(outside(a, p) <= tol);
+    assert_true(outside(b, p) <= tol);
+}
+
+static void expect_none(const placed_shape *a, const placed_shape *b)
+{
+    double dep = -1, n[3], p[3];
+    assert_int_equal(narrow_contact(a, b, &dep, n, p), 0);
+}
+
+static const double X[3] = {1, 0, 0}, Y[3] = {0, 1, 0}, Z[3] = {0, 0, 1};
+
+static void test_sphere_sphere(void **state)
+{
+    uint64_t st = 11;
+    shape_def s1, s2;
+    placed_shape a, b;
+    motion M;
+    int k;
+    make(&s1, AQS_SHAPE_SPHERE, 1.0, 0, 0);
+    make(&s2, AQS_SHAPE_SPHERE, 0.5, 0, 0);
+    for (k = 0; k < 50; k++) {
+        double d = test_uniform(&st, 0.6, 1.49);
+        random_motion(&st, &M, 10.0);
+        place(&a, &s1, &M, NULL, 0, 0, 0);
+        place(&b, &s2, &M, NULL, d, 0, 0);
+        expect_contact(&a, &b, &M, 1.5 - d, X);
+        place(&b, &s2, &M, NULL, 1.5 + 1e-9 + d, 0, 0);
+        expect_none(&a, &b);
+    }
+}
+
+static void test_sphere_box(void **state)
+{
+    uint64_t st = 12;
+    shape_def bx, sp;
+    placed_shape a, b;
+    motion M;
+    int k;
+    make(&bx, AQS_SHAPE_BOX, 1.0, 2.0, 3.0);
+    make(&sp, AQS_SHAPE_SPHERE, 0.5, 0, 0);
+    for (k = 0; k < 50; k++) {
+        double delta = test_uniform(&st, 1e-6, 0.4);
+        random_motion(&st, &M, 10.0);
+        place(&a, &bx, &M, NULL, 0, 0, 0);
+        place(&b, &sp, &M, NULL, 0, 2.5 - delta, 0); /* on the +y face */
+        expect_contact(&a, &b, &M, delta, Y);
+        place(&b, &sp, &M, NULL, 0, 0, -(3.5 - delta)); /* under the -z face */
+        {
+            const double mz[3] = {0, 0, -1};
+            expect_contact(&a, &b, &M, delta, mz);
+        }
+        place(&b, &sp, &M, NULL, 1.5 + 1e-9, 0, 0);
+        expect_none(&a, &b);
+    }
+}
+
+static void test_capsule_capsule(void **state)
+{
+    uint64_t st = 13;
+    shape_def c1, c2;
+    placed_shape a, b;
+    motion M;
+    double Rx[9];
+    const double xaxis[3] = {1, 0, 0};
+    int k;
+    make(&c1, AQS_SHAPE_CAPSULE, 0.3, 1.0, 0);
+    make(&c2, AQS_SHAPE_CAPSULE, 0.2, 2.0, 0);
+    test_rodrigues(xaxis, (0.5 * PI), Rx); /* c2 along y: crossed */
+    for (k = 0; k < 50; k++) {
+        double d = test_uniform(&st, 0.3, 0.499);
+        random_motion(&st, &M, 10.0);
+        place(&a, &c1, &M, NULL, 0, 0, 0);
+        place(&b, &c2, &M, NULL, d, 0, 0); /* parallel, side by side */
+        expect_contact(&a, &b, &M, 0.5 - d, X);
+        place(&b, &c2, &M, Rx, d, 0, 0); /* crossed */
+        expect_contact(&a, &b, &M, 0.5 - d, X);
+        place(&b, &c2, &M, NULL, 0, 0, 3.0 + d); /* end to end along z */
+        expect_contact(&a, &b, &M, 0.5 - d, Z);
+        place(&b, &c2, &M, Rx, 0.5 + 1e-9, 0, 0);
+        expect_none(&a, &b);
+    }
+}
+
+static void test_box_box(void **state)
+{
+    uint64_t st = 14;
+    shape_def b1, b2;
+    placed_shape a, b;
+    motion M;
+    double Redge[9], Rcorner[9];
+    const double zaxis[3] = {0, 0, 1};
+    /* Rotation taking the cube diagonal (1,1,1)/sqrt3 onto -x: axis d x (-x), angle acos(-1/sqrt3). */
+    const double axis[3] = {0, -1, 1};
+    int k;
+    make(&b1, AQS_SHAPE_BOX, 1.0, 1.5, 2.0);
+    make(&b2, AQS_SHAPE_BOX, 0.5, 0.5, 0.5);
+    test_rodrigues(zaxis, (0.25 * PI), Redge);
+    test_rodrigues(axis, acos(-1.0 / sqrt(3.0)), Rcorner);
+    for (k = 0; k < 50; k++) {
+        double delta = test_uniform(&st, 1e-6, 0.2);
+        random_motion(&st, &M, 10.0);
+        place(&a, &b1, &M, NULL, 0, 0, 0);
+        place(&b, &b2, &M, NULL, 1.5 - delta, 0.1, -0.2); /* face on face */
+        expect_contact(&a, &b, &M, delta, X);
+        place(&b, &b2, &M, Redge, 1.0 + 0.5 * sqrt(2.0) - delta, 0, 0); /* edge on face */
+        expect_contact(&a, &b, &M, delta, X);
+        place(&b, &b2, &M, Rcorner, 1.0 + 0.5 * sqrt(3.0) - delta, 0, 0); /* corner on face */
+        expect_contact(&a, &b, &M, delta, X);
+        place(&b, &b2, &M, Rcorner, 1.0 + 0.5 * sqrt(3.0) + 1e-9, 0, 0);
+        expect_none(&a, &b);
+    }
+}
+
+static void test_cylinder_and_hull(void **state)
+{
+    uint64_t st = 15;
+    shape_def cy, sp, hull, box;
+    placed_shape a, b, h, c;
+    motion M;
+    double pts[24];
+    int k, i;
+    make(&cy, AQS_SHAPE_CYLINDER, 1.0, 2.0, 0);
+    make(&sp, AQS_SHAPE_SPHERE, 0.5, 0, 0);
+    make(&box, AQS_SHAPE_BOX, 0.5, 0.7, 0.9);
+    for (i = 0; i < 8; i++) { /* the same box as a hull of its corners */
+        pts[3 * i] = (i & 1 ? 0.5 : -0.5);
+        pts[3 * i + 1] = (i & 2 ? 0.7 : -0.7);
+        pts[3 * i + 2] = (i & 4 ? 0.9 : -0.9);
+    }
+    memset(&hull, 0, sizeof hull);
+    hull.type = AQS_SHAPE_HULL;
+    hull.pts = pts;
+    hull.npts = 8;
+    shape_bound(&hull);
+    assert_true(fabs(hull.radius - box.radius) < 1e-15);
+    for (k = 0; k < 50; k++) {
+        double delta = test_uniform(&st, 1e-6, 0.4), depth, n1[3], n2[3], p1[3], p2[3], d2;
+        random_motion(&st, &M, 10.0);
+        place(&a, &cy, &M, NULL, 0, 0, 0);
+        place(&b, &sp, &M, NULL, 1.5 - delta, 0, 0); /* side */
+        expect_contact(&a, &b, &M, delta, X);
+        place(&b, &sp, &M, NULL, 0, 0, 2.5 - delta); /* cap */
+        expect_contact(&a, &b, &M, delta, Z);
+        /* hull == box, against the cylinder at a random offset */
+        place(&h, &hull, &M, NULL, 1.2, 0.3, 0.5);
+        place(&c, &box, &M, NULL, 1.2, 0.3, 0.5);
+        assert_int_equal(narrow_contact(&a, &h, &depth, n1, p1), 1);
+        assert_int_equal(narrow_contact(&a, &c, &d2, n2, p2), 1);
+        assert_true(fabs(depth - d2) < 1e-12 && test_max_abs_diff(n1, n2, 3) < 1e-12);
+    }
+}
+
+static void test_touching_and_separated(void **state)
+{
+    uint64_t st = 16;
+    shape_def s1, s2, b1;
+    placed_shape a, b;
+    motion I;
+    double dep, n[3], p[3];
+    int k, r;
+    identity_motion(&I);
+    make(&s1, AQS_SHAPE_SPHERE, 1.0, 0, 0);
+    make(&s2, AQS_SHAPE_SPHERE, 0.5, 0, 0);
+    make(&b1, AQS_SHAPE_BOX, 1.0, 1.0, 1.0);
+    /* Separated by 1e-12: no contact. Penetrating by 1e-9: depth 1e-9 to 1e-15. */
+    place(&a, &s1, &I, NULL, 0, 0, 0);
+    place(&b, &s2, &I, NULL, 1.5 + 1e-12, 0, 0);
+    expect_none(&a, &b);
+    place(&b, &s2, &I, NULL, 1.5 - 1e-9, 0, 0);
+    assert_int_equal(narrow_contact(&a, &b, &dep, n, p), 1);
+    assert_true(fabs(dep - 1e-9) < 1e-15);
+    place(&a, &b1, &I, NULL, 0, 0, 0);
+    place(&b, &b1, &I, NULL, 2.0 + 1e-12, 0.3, 0);
+    expect_none(&a, &b);
+    place(&b, &b1, &I, NULL, 2.0 - 1e-9, 0.3, 0);
+    assert_int_equal(narrow_contact(&a, &b, &dep, n, p), 1);
+    assert_true(fabs(dep - 1e-9) < 1e-15);
+    /* Exactly touching (faces, edges, corners, spheres), under random
+     * motions: whatever libccd decides, the answer is finite, the depth is
+     * at most rounding, the normal unit. */
+    for (k = 0; k < 400; k++) {
+        motion M;
+        double off[3] = {2.0, 0, 0};
+        int j;
+        random_motion(&st, &M, 10.0);
+        if (k % 4 == 1) off[1] = 2.0;
+        if (k % 4 == 2) off[1] = off[2] = 2.0;
+        if (k % 4 == 3) off[1] = test_uniform(&st, -1.0, 1.0);
+        place(&a, &b1, &M, NULL, 0, 0, 0);
+        place(&b, &b1, &M, NULL, off[0], off[1], off[2]);
+        r = narrow_contact(&a, &b, &dep, n, p);
+        if (r) {
+            assert_true(isfinite(dep) && dep >= 0.0 && dep < 1e-12);
+            assert_true(fabs(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0) < 1e-12);
+            for (j = 0; j < 3; j++) assert_true(isfinite(p[j]));
+        }
+        place(&a, &s1, &M, NULL, 0, 0, 0);
+        place(&b, &s2, &M, NULL, 1.5, 0, 0);
+        r = narrow_contact(&a, &b, &dep, n, p);
+        if (r) assert_true(isfinite(dep) && dep >= 0.0 && dep < 1e-12 && isfinite(n[0] + n[1] + n[2] + p[0] + p[1] + p[2]));
+    }
+}
+
+static void test_identical_shapes(void **state)
+{
+    uint64_t st = 17;
+    const int32_t types[4] = {AQS_SHAPE_SPHERE, AQS_SHAPE_CAPSULE, AQS_SHAPE_BOX, AQS_SHAPE_CYLINDER};
+    int k, t;
+    for (t = 0; t < 4; t++) {
+        shape_def s;
+        make(&s, types[t], 0.7, 0.4, 0.9);
+        for (k = 0; k < 20; k++) {
+            placed_shape a, b;
+            motion M;
+            double dep, n[3], p[3];
+            random_motion(&st, &M, 5.0);
+            place(&a, &s, &M, NULL, 0, 0, 0);
+            place(&b, &s, &M, NULL, 0, 0, 0);
+            assert_int_equal(narrow_contact(&a, &b, &dep, n, p), 1);
+            if (!(isfinite(dep) && dep > 0.0 && dep <= 2.0 * s.radius * (1.0 + 1e-12))) {
+                print_error("type %d: depth %.17g, bound radius %g\n", (int)types[t], dep, s.radius);
+                fail();
+            }
+            assert_true(fabs(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0) < 1e-12);
+            assert_true(isfinite(p[0] + p[1] + p[2]));
+            if (types[t] == AQS_SHAPE_SPHERE) assert_true(fabs(dep - 1.4) < 1e-9);
+        }
+    }
+}
+
+static void test_size_ratio_1e4(void **state)
+{
+    uint64_t st = 18;
+    shape_def big, small, bigbox, smallbox;
+    placed_shape a, b;
+    motion M;
+    int k;
+    make(&big, AQS_SHAPE_SPHERE, 1e4, 0, 0);
+    make(&small, AQS_SHAPE_SPHERE, 1.0, 0, 0);
+    make(&bigbox, AQS_SHAPE_BOX, 1e4, 1e4, 1e4);
+    make(&smallbox, AQS_SHAPE_BOX, 1.0, 1.0, 1.0);
+    for (k = 0; k < 30; k++) {
+        double delta = test_uniform(&st, 1e-3, 0.5);
+        random_motion(&st, &M, 100.0);
+        place(&a, &big, &M, NULL, 0, 0, 0);
+        place(&b, &small, &M, NULL, 0, 0, 1e4 + 1.0 - delta);
+        expect_contact(&a, &b, &M, delta, Z);
+        place(&a, &bigbox, &M, NULL, 0, 0, 0);
+        place(&b, &smallbox, &M, NULL, 3.0, -7.0, 1e4 + 1.0 - delta);
+        expect_contact(&a, &b, &M, delta, Z);
+        place(&b, &smallbox, &M, NULL, 3.0, -7.0, 1e4 + 1.0 + 1e-6);
+        expect_none(&a, &b);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sphere_sphere),
+        cmocka_unit_test(test_sphere_box),
+        cmocka_unit_test(test_capsule_capsule),
+        cmocka_unit_test(test_box_box),
+        cmocka_unit_test(test_cylinder_and_hull),
+        cmocka_unit_test(test_touching_and_separated),
+        cmocka_unit_test(test_identical_shapes),
+        cmocka_unit_test(test_size_ratio_1e4),
+    };
+    return cmocka_run_group_tests_name("narrowphase", tests, NULL, NULL);
+}
