@@ -47,6 +47,7 @@ CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort 
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
 BENCH_MAINS := bench/demo.c bench/exact_bench.c bench/adaptive_bench.c bench/aqs_bench.c
+BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
@@ -108,8 +109,9 @@ PY_ENV := LD_PRELOAD="$$($(CC) -print-file-name=libasan.so) $$($(CC) -print-file
 else
 PY_ENV :=
 endif
-check-python: $(SHLIB)
+check-python: $(SHLIB) $(BUILD)/bench/urdf_export
 	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
+	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) \
 	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
 
 check-install: lib
@@ -129,6 +131,13 @@ $(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
 	@$(CC) -std=c99 -O2 -g $(WARN) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+
+# The URDF exporter runs in check-python (tests/python/test_urdf_bench.py), so it is
+# built like the tests, under the sanitizers with SANITIZE=1.
+$(BUILD)/bench/urdf_export: bench/urdf_export.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
+	@mkdir -p $(dir $@)
+	@echo "  CC      $<"
+	@$(CC) -std=c99 $(OPT) $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
 
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo

@@ -113,6 +113,7 @@ CALLS = [
     ("positions", ()), ("set_positions", ([0.0],)), ("joint_position", (0,)),
     ("set_joint_position", (0, 0.0)), ("constraint_forces", ()), ("joint_constraint_force", (0,)),
     ("body_pose", (0,)), ("body_poses", ()),
+    ("body_inertial", (0,)), ("joint_definition", (0,)), ("save_urdf", ("never-written.urdf",)),
 ]
 
 
