@@ -139,6 +139,15 @@ $(BUILD)/bench/urdf_export: bench/urdf_export.c $(wildcard bench/*.h) $(BENCH_SU
 	@echo "  CC      $<"
 	@$(CC) -std=c99 $(OPT) $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
 
+# Pinocchio and MuJoCo side by side with aqs (bench/peers.py; results in docs/bench.md,
+# section "Peers"). Installs the optional peers (pin, mujoco from PyPI) first.
+# PEERS_ARGS passes options, e.g. PEERS_ARGS="--sizes 1000,10000".
+.PHONY: peers
+peers: $(BUILD)/bench/urdf_export $(SHLIB)
+	@bash tools/deps.sh --peers
+	AQS_LIBRARY=$(abspath $(SHLIB)) PYTHONPATH=$(abspath bindings/python) \
+	    $(PYTHON) bench/peers.py --exporter $(abspath $(BUILD)/bench/urdf_export) $(PEERS_ARGS)
+
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo
 
