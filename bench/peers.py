@@ -373,6 +373,49 @@ def format_table(results):
     return "\n".join(rows)
 
 
+def short_error(text):
+    text = text.replace("\n", " ").replace("|", "/")
+    return text if len(text) < 110 else text[:107] + "..."
+
+
+def summary_table(results):
+    """One row per scene and size: every engine's time per solve (ms) and
+    difference from aqs exact, or where it stopped."""
+    cases = {}
+    for r in results:
+        cases.setdefault((r["scene"], int(r["size"])), {})[(r["engine"], r.get("variant"))] = r
+    order = {"chain": 0, "molecule": 1, "millipede": 2}
+    rows = ["| scene | joints | aqs exact, full (ms) | Pinocchio ABA (ms) | MuJoCo mj_forward (ms) "
+            "| aqs exact step, N_f = 1 (ms) | aqs 2^-10 step (ms, N_E) | aqs 2^-19 step (ms, N_E) |",
+            "|---|---|---|---|---|---|---|---|"]
+    stops = []
+    for (scene, size) in sorted(cases, key=lambda k: (order.get(k[0], 9), k[1])):
+        c = cases[(scene, size)]
+
+        def cell(engine, variant, with_diff=False, with_ne=False):
+            r = c.get((engine, variant))
+            if r is None:
+                failed = [x for (e, v), x in c.items() if e == engine and not x.get("ok")]
+                if failed:
+                    stops.append("%s %d, %s: %s" % (scene, size, engine, failed[0]["error"]))
+                    return "stopped (%d)" % len(stops)
+                return ""
+            text = "%.3f" % (1e3 * r["seconds"])
+            if with_diff:
+                text += " (diff %.1e)" % r["max_rel_vs_aqs"]
+            if with_ne:
+                text += ", %.0f" % r["computed_joints"]
+            return text
+
+        rows.append("| %s | %d | %s | %s | %s | %s | %s | %s |" % (
+            scene, size, cell("aqs", "exact full"), cell("pinocchio", "aba", True),
+            cell("mujoco", "mj_forward", True), cell("aqs", "exact step"),
+            cell("aqs", "adaptive step 2^-10", with_ne=True),
+            cell("aqs", "adaptive step 2^-19", with_ne=True)))
+    notes = ["(%d) %s" % (i + 1, short_error(t)) for i, t in enumerate(stops)]
+    return "\n".join(rows) + "\n\n" + "\n".join("- " + n for n in notes)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -390,7 +433,13 @@ def main():
     parser.add_argument("--mem-limit-gb", type=float, default=6.0)
     parser.add_argument("--timeout", type=float, default=900.0)
     parser.add_argument("--out", default=os.path.join(REPO, "docs", "bench", "peers.jsonl"))
+    parser.add_argument("--summary", metavar="JSONL",
+                        help="only print the summary table of an earlier run's JSON lines")
     args = parser.parse_args()
+    if args.summary:
+        with open(args.summary) as handle:
+            print(summary_table([json.loads(line) for line in handle if line.strip()]))
+        return 0
     if args.worker:
         worker(args)
         return 0
@@ -413,6 +462,8 @@ def main():
             for r in results:
                 handle.write(json.dumps(r) + "\n")
     print(format_table(results))
+    print()
+    print(summary_table(results))
     return 0
 
 

@@ -13,6 +13,13 @@
  * forces. OUT.json: {"scene", "bodies", "joints", "gravity", "body_forces":
  * [{"body", "force", "point", "torque"}], "joint_forces": [{"joint", "tau"}],
  * "qdd"} with every number printed %.17g.
+ *
+ *   urdf_export --check-errors DIR
+ *
+ * checks bench_export_urdf's failures instead (exit 0 when all behave): a
+ * NULL linkage or path, a file that cannot be opened, and a spherical joint
+ * (no URDF equivalent) each give AQS_EINVAL and a message naming the
+ * problem, and leave no file behind.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -49,6 +56,45 @@ static aqs_status build(aqs_linkage *L, const char *scene, int32_t joints)
     return AQS_EINVAL;
 }
 
+static int expect(int ok, const char *what)
+{
+    if (!ok) fprintf(stderr, "urdf_export --check-errors: %s\n", what);
+    return ok ? 0 : 1;
+}
+
+static int check_errors(const char *dir)
+{
+    const double com[3] = {0, 0, 0}, I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double pos[3] = {0, 0, 0}, quat[4] = {1, 0, 0, 0}, axis[3] = {0, 0, 1};
+    char path[1024], message[256];
+    aqs_linkage *L = NULL;
+    FILE *f;
+    int bad = 0;
+    snprintf(path, sizeof path, "%s/spherical.urdf", dir);
+    if (aqs_linkage_create(&L) != AQS_OK) return 1;
+    aqs_body_add(L, 1.0, com, I, NULL);
+    aqs_body_add(L, 1.0, com, I, NULL);
+    aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL);
+    aqs_joint_add(L, AQS_JOINT_SPHERICAL, 0, 1, pos, quat, NULL, NULL);
+    message[0] = 0;
+    bad += expect(bench_export_urdf(NULL, path, NULL, message, sizeof message) == AQS_EINVAL &&
+                      strstr(message, "NULL") != NULL, "NULL linkage not refused");
+    bad += expect(bench_export_urdf(L, NULL, NULL, NULL, 0) == AQS_EINVAL, "NULL path not refused");
+    message[0] = 0;
+    bad += expect(bench_export_urdf(L, "/nonexistent-dir/x.urdf", NULL, message, sizeof message) ==
+                          AQS_EINVAL && strstr(message, "/nonexistent-dir/x.urdf") != NULL,
+                  "unwritable path not refused by name");
+    message[0] = 0;
+    bad += expect(bench_export_urdf(L, path, NULL, message, sizeof message) == AQS_EINVAL &&
+                      strstr(message, "joint 1 has type 2") != NULL,
+                  "spherical joint not refused by index and type");
+    f = fopen(path, "r");
+    bad += expect(f == NULL, "partial file left behind");
+    if (f) fclose(f);
+    aqs_linkage_destroy(L);
+    return bad ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
     const double gravity[3] = {0.5, -9.81, 0.25};
@@ -60,6 +106,7 @@ int main(int argc, char **argv)
     char message[512];
     FILE *f;
     aqs_status st;
+    if (argc == 3 && !strcmp(argv[1], "--check-errors")) return check_errors(argv[2]);
     if (argc != 4 && argc != 5) {
         fprintf(stderr, "usage: urdf_export SCENE [JOINTS] OUT.urdf OUT.json\n");
         return 2;

@@ -83,3 +83,13 @@ def test_exporter_refuses_unknown_scene(tmp_path):
                             capture_output=True, text=True)
     assert result.returncode == 2 and "unknown scene teapot" in result.stderr
     assert not (tmp_path / "a").exists()
+
+
+def test_exporter_errors(tmp_path):
+    """bench_export_urdf refuses a NULL linkage or path, an unwritable file
+    and a spherical joint with AQS_EINVAL and a message, leaving no file
+    (the checks run inside the C program; it exits 0 only if all hold)."""
+    result = subprocess.run([EXPORTER, "--check-errors", str(tmp_path)], capture_output=True,
+                            text=True)
+    assert result.returncode == 0, result.stderr
+    assert list(tmp_path.iterdir()) == []
