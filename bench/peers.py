@@ -165,14 +165,6 @@ def aqs_to_engine_tau(problem, state):
     return {f["joint"]: np.array(f["tau"]) for f in problem.loads["joint_forces"]}
 
 
-def quat_matrix(q):
-    import numpy as np
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
 def run_pinocchio(problem, args, state):
     import numpy as np
     import pinocchio as pin
