@@ -48,6 +48,7 @@ CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort 
 TEST_SUPPORT := $(sort $(wildcard tests/support/*.c))
 
 BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c) bench/collide_bench.c
+BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
@@ -109,8 +110,9 @@ PY_ENV := LD_PRELOAD="$$($(CC) -print-file-name=libasan.so) $$($(CC) -print-file
 else
 PY_ENV :=
 endif
-check-python: $(SHLIB)
+check-python: $(SHLIB) $(BUILD)/bench/urdf_export
 	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
+	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) \
 	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
 
 check-install: lib
@@ -130,6 +132,22 @@ $(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
 	@$(CC) -std=c99 -O2 -g $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+
+# The URDF exporter runs in check-python (tests/python/test_urdf_bench.py), so it is
+# built like the tests, under the sanitizers with SANITIZE=1.
+$(BUILD)/bench/urdf_export: bench/urdf_export.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
+	@mkdir -p $(dir $@)
+	@echo "  CC      $<"
+	@$(CC) -std=c99 $(OPT) $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+
+# Pinocchio and MuJoCo side by side with aqs (bench/peers.py; results in docs/bench.md,
+# section "Peers"). Installs the optional peers (pin, mujoco from PyPI) first.
+# PEERS_ARGS passes options, e.g. PEERS_ARGS="--sizes 1000,10000".
+.PHONY: peers
+peers: $(BUILD)/bench/urdf_export $(SHLIB)
+	@bash tools/deps.sh --peers
+	AQS_LIBRARY=$(abspath $(SHLIB)) PYTHONPATH=$(abspath bindings/python) \
+	    $(PYTHON) bench/peers.py --exporter $(abspath $(BUILD)/bench/urdf_export) $(PEERS_ARGS)
 
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo
@@ -181,8 +199,9 @@ bench-plots: $(BENCH_DEPS_STAMP)
 	$(PYTHON) bench/plot.py --set $(or $(BENCH_SET),quick) docs/bench
 
 # aqs-bench on a tiny molecule: JSON Lines schema and consistency (no timing asserted).
-check-bench: $(AQS_BENCH)
-	AQS_BENCH=$(abspath $(AQS_BENCH)) $(PYTHON) -m pytest -q -p no:cacheprovider \
+check-bench: $(AQS_BENCH) $(SHLIB)
+	$(PY_ENV) AQS_BENCH=$(abspath $(AQS_BENCH)) AQS_LIBRARY=$(abspath $(SHLIB)) \
+	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider \
 	    tests/bench/test_aqs_bench.py
 
 # Collision queries: lazy tree vs full tree vs brute force (docs/bench.md, "Collision").

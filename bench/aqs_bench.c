@@ -40,6 +40,7 @@
 #include "aqs.h"
 #include "scenes.h"
 #include "timing.h"
+#include "urdf.h"
 
 #define BENCH_MAX_LIST 64
 #define BENCH_FORCE_N 1.0 /* N, per force */
@@ -56,7 +57,7 @@ typedef struct bench_options {
     int32_t steps, repeats, exact_every, tip_every;
     uint64_t seed;
     double first_move;
-    const char *out, *tip_path;
+    const char *out, *tip_path, *export_urdf;
     int append, quiet;
 } bench_options;
 
@@ -127,6 +128,8 @@ static void usage(FILE *f)
             "  --tip-path PATH    CSV of the last body's far end (chain30, chain) every\n"
             "                     --tip-every M steps (default 1): run,forces,eps,step,x,y,z\n"
             "  --quiet            no table on stdout\n"
+            "  --export-urdf FILE write the scene (--scene, --joints) as URDF to FILE and\n"
+            "                     exit without benchmarking\n"
             "  --help\n");
 }
 
@@ -247,7 +250,7 @@ static int parse_list(const char *opt, const char *s, bench_options *o,
 
 enum { OPT_SCENE, OPT_JOINTS, OPT_FORCES, OPT_METRIC, OPT_EPS, OPT_STEPS, OPT_REPEATS,
        OPT_SEED, OPT_FIRST_MOVE, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
-       OPT_TIP_EVERY, OPT_QUIET, OPT_HELP };
+       OPT_TIP_EVERY, OPT_QUIET, OPT_EXPORT_URDF, OPT_HELP };
 
 static const struct {
     const char *name;
@@ -261,6 +264,7 @@ static const struct {
     {"--out", OPT_OUT, 1},           {"--append", OPT_APPEND, 0},
     {"--tip-path", OPT_TIP_PATH, 1}, {"--tip-every", OPT_TIP_EVERY, 1},
     {"--quiet", OPT_QUIET, 0},       {"--help", OPT_HELP, 0},
+    {"--export-urdf", OPT_EXPORT_URDF, 1},
 };
 #define BENCH_NOPTIONS ((int)(sizeof bench_option_table / sizeof bench_option_table[0]))
 
@@ -365,6 +369,9 @@ static int parse_options(int argc, char **argv, bench_options *o)
         case OPT_OUT:
         case OPT_TIP_PATH:
             *(id == OPT_OUT ? &o->out : &o->tip_path) = val;
+            break;
+        case OPT_EXPORT_URDF:
+            o->export_urdf = val;
             break;
         case OPT_APPEND:
         case OPT_QUIET:
@@ -914,6 +921,32 @@ out:
     return rc;
 }
 
+/* --export-urdf: build the scene alone, write it as URDF, no benchmark. */
+static int export_scene(const bench_options *o)
+{
+    aqs_linkage *L = NULL;
+    char msg[256] = "";
+    aqs_status st = aqs_linkage_create(&L);
+    if (st == AQS_OK) {
+        st = bench_build_scene(L, (bench_scene_kind)o->scene, o->size);
+    }
+    if (st != AQS_OK) {
+        fprintf(stderr, "aqs-bench: building the scene failed: %s\n",
+                L != NULL ? aqs_linkage_last_error(L) : aqs_status_string(st));
+        aqs_linkage_destroy(L);
+        return 1;
+    }
+    st = bench_export_urdf(L, o->export_urdf, bench_scene_name((bench_scene_kind)o->scene), msg,
+                           sizeof msg);
+    aqs_linkage_destroy(L);
+    if (st != AQS_OK) {
+        fprintf(stderr, "aqs-bench: --export-urdf %s: %s\n", o->export_urdf, msg);
+        return 1;
+    }
+    printf("wrote %s (scene %s)\n", o->export_urdf, bench_scene_name((bench_scene_kind)o->scene));
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     bench_options opt;
@@ -929,6 +962,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "aqs-bench: header version %d but library version %d\n",
                 (int)AQS_VERSION_NUMBER, (int)aqs_version());
         return 1;
+    }
+    if (opt.export_urdf != NULL) {
+        return export_scene(&opt);
     }
     memset(&b, 0, sizeof b);
     b.opt = &opt;

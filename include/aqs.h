@@ -207,6 +207,29 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *linkage, int32_
                                               int32_t *max_handles);
 
 /* ------------------------------------------------------------------------
+ * Reading the model back (any phase; what was added, for exporters)
+ * ---------------------------------------------------------------------- */
+
+/** Mass properties of a body as added. Any phase. Each out pointer may be NULL.
+ *  mass: kg. com: (3) centre of mass, body frame, m. inertia: (3 x 3,
+ *  row-major) about the centre of mass, body frame, kg m^2: the symmetric
+ *  part (I + I^T) / 2 of what aqs_body_add was given (the part it stores).
+ *  Returns AQS_OK, AQS_EINVAL (NULL linkage), AQS_ERANGE. */
+AQS_API aqs_status aqs_body_get_inertial(const aqs_linkage *linkage, int32_t body,
+                                         double *mass, double com[3], double inertia[9]);
+
+/** Definition of a joint as added. Any phase. Each out pointer may be NULL.
+ *  type: AQS_JOINT_*. parent: a body index or AQS_WORLD. child: a body index.
+ *  pos: (3) joint frame origin in the parent frame, m, as given. quat: (4,
+ *  w x y z) joint frame orientation, the given one divided by its norm.
+ *  axis: (3) the given axis divided by its norm; (0, 0, 1) for the types that
+ *  ignore it (spherical, free, fixed).
+ *  Returns AQS_OK, AQS_EINVAL (NULL linkage), AQS_ERANGE. */
+AQS_API aqs_status aqs_joint_get_definition(const aqs_linkage *linkage, int32_t joint,
+                                            int32_t *type, int32_t *parent, int32_t *child,
+                                            double pos[3], double quat[4], double axis[3]);
+
+/* ------------------------------------------------------------------------
  * Loads (any phase; persistent until changed or cleared)
  * ---------------------------------------------------------------------- */
 

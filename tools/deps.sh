@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
 # Install what is missing of the project's dependencies (Debian packages, PyPI).
-# `tools/deps.sh bench` also installs the benchmark plots' dependency (matplotlib;
-# `make bench-plots` / `make bench` call it so).
+#   tools/deps.sh           what make check needs
+#   tools/deps.sh bench     also the benchmark plots' dependency, matplotlib
+#                           (`make bench-plots` / `make bench` call it so)
+#   tools/deps.sh --peers   also the optional peers of bench/peers.py (make peers):
+#                           pin (Pinocchio) and mujoco from PyPI
 set -euo pipefail
+peers=0
+[ "${1:-}" = "--peers" ] && peers=1
 pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config)
 missing=()
 for p in "${pkgs[@]}"; do
@@ -30,4 +35,13 @@ fi
 if [ ${#pymissing[@]} -gt 0 ]; then
     echo "deps: pip installing ${pymissing[*]}"
     $PY -m pip install -q "${pymissing[@]}"
+fi
+if [ "$peers" = 1 ]; then
+    peermissing=()
+    $PY -c "import pinocchio" 2>/dev/null || peermissing+=(pin)
+    $PY -c "import mujoco" 2>/dev/null || peermissing+=(mujoco)
+    if [ ${#peermissing[@]} -gt 0 ]; then
+        echo "deps: pip installing the bench peers ${peermissing[*]}"
+        $PY -m pip install -q "${peermissing[@]}"
+    fi
 fi

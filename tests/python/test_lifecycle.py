@@ -117,6 +117,7 @@ CALLS = [
     ("add_shape", (0, "sphere", [0.5])), ("add_hull", (0, np.eye(4, 3) + 0.1 * np.arange(12).reshape(4, 3))),
     ("set_collision_filter", (0, 1, 1)), ("exclude_collision", (0, -1)), ("set_collide_joined", (True,)),
     ("collide", ()), ("any_contact", ()), ("collision_stats", ()), ("set_contact_stiffness", (10.0,)),
+    ("body_inertial", (0,)), ("joint_definition", (0,)), ("save_urdf", ("never-written.urdf",)),
 ]
 
 

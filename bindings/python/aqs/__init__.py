@@ -59,6 +59,7 @@ __all__ = [
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
+    "BodyInertial", "JointDefinition", "load_urdf", "save_urdf", "URDFError",
 ]
 
 __version__ = "0.1.0"
@@ -84,6 +85,16 @@ Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (
 JointLayout = collections.namedtuple("JointLayout", "q_offset nq v_offset nv")
 JointLayout.__doc__ = ("Where a joint's values sit in the bulk arrays: q_offset/nq in "
                        "positions(), v_offset/nv in accelerations() and joint forces.")
+
+BodyInertial = collections.namedtuple("BodyInertial", "mass com inertia")
+BodyInertial.__doc__ = ("A body's mass properties as added (Linkage.body_inertial): mass (kg), "
+                        "com (3) body frame (m), inertia (3, 3) about the com, body frame "
+                        "(kg m^2), symmetrized.")
+JointDefinition = collections.namedtuple("JointDefinition", "kind parent child pos quat axis")
+JointDefinition.__doc__ = ("A joint as added (Linkage.joint_definition): kind (name such as "
+                           "\"revolute\"), parent (body or WORLD), child, pos (3), quat (4, w x y z, "
+                           "normalized), axis (3, normalized; (0, 0, 1) where ignored).")
+_KIND_NAMES = {value: name for name, value in JOINT_KINDS.items()}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -417,6 +428,39 @@ class Linkage:
         return dict(nodes=nodes.value, height=height.value, mean_handles=mean_handles.value,
                     max_handles=max_handles.value)
 
+    # -- reading the model back ------------------------------------------------
+
+    def body_inertial(self, body):
+        """A body's mass properties as added, any phase (aqs_body_get_inertial):
+        BodyInertial(mass kg, com (3) body frame m, inertia (3, 3) about the com,
+        body frame, kg m^2 -- the symmetric part of what add_body was given)."""
+        f = "aqs_body_get_inertial"
+        mass = ctypes.c_double()
+        com = np.empty(3, dtype=_F64)
+        inertia = np.empty((3, 3), dtype=_F64)
+        self._call(f, _index(body, f, "body"), ctypes.byref(mass), com, inertia)
+        return BodyInertial(mass.value, com, inertia)
+
+    def joint_definition(self, joint):
+        """A joint as added, any phase (aqs_joint_get_definition):
+        JointDefinition(kind name, parent (body or WORLD), child, pos (3) m in the
+        parent frame, quat (4, w x y z) divided by its norm, axis (3) divided by
+        its norm, (0, 0, 1) for spherical, free and fixed joints)."""
+        f = "aqs_joint_get_definition"
+        kind, parent, child = (ctypes.c_int32() for _ in range(3))
+        pos = np.empty(3, dtype=_F64)
+        quat = np.empty(4, dtype=_F64)
+        axis = np.empty(3, dtype=_F64)
+        self._call(f, _index(joint, f, "joint"), ctypes.byref(kind), ctypes.byref(parent),
+                   ctypes.byref(child), pos, quat, axis)
+        return JointDefinition(_KIND_NAMES.get(kind.value, kind.value), parent.value,
+                               child.value, pos, quat, axis)
+
+    def save_urdf(self, path, name="aqs"):
+        """Write the model (at q = 0) as URDF to path; see aqs.save_urdf."""
+        from .urdf import save_urdf
+        save_urdf(self, path, name=name)
+
     # -- loads -------------------------------------------------------------------
 
     def set_gravity(self, gravity):
@@ -721,3 +765,5 @@ class Linkage:
         values = [ctypes.c_int32() for _ in range(4)]
         self._call("aqs_linkage_get_collision_stats", *[ctypes.byref(v) for v in values])
         return CollisionStats(*(v.value for v in values))
+
+from .urdf import URDFError, load_urdf, save_urdf  # noqa: E402  (needs Linkage)

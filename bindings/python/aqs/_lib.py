@@ -237,6 +237,11 @@ PROTOTYPES = {
     "aqs_joint_get_layout": (status_t, [linkage_p, ctypes.c_int32,
                                         int32_p, int32_p, int32_p, int32_p]),
     "aqs_linkage_get_tree_stats": (status_t, [linkage_p, int32_p, int32_p, double_p, int32_p]),
+    # Reading the model back
+    "aqs_body_get_inertial": (status_t, [linkage_p, ctypes.c_int32, double_p, dout_or_null,
+                                         dout_or_null]),
+    "aqs_joint_get_definition": (status_t, [linkage_p, ctypes.c_int32, int32_p, int32_p,
+                                            int32_p, dout_or_null, dout_or_null, dout_or_null]),
     # Loads
     "aqs_linkage_set_gravity": (status_t, [linkage_p, din]),
     "aqs_body_set_force": (status_t, [linkage_p, ctypes.c_int32, din,

@@ -1,0 +1,537 @@
+"""URDF in and out (aqs.load_urdf, aqs.save_urdf) and the model read-back
+(Linkage.body_inertial, Linkage.joint_definition) they are built on.
+
+- read-back: the values given to add_body / add_joint, normalized as
+  documented, in every phase; errors name the index.
+- round trip: a linkage with every URDF-expressible joint type (revolute,
+  prismatic, fixed, free, planar), a massless welded body and rotated joint
+  frames is saved, loaded and saved again: same structure and names, numbers
+  equal to a few ulp (the rpy angles are recomputed from the stored
+  quaternion, which was normalized on input), and the exact solve under the
+  same loads equal to the original's within 1e-12 relative.
+- a URDF written by hand the way CAD exporters write them (a massive root
+  link and no world link, massless frame links welded by fixed joints,
+  inertial frames that are offset and rotated, visual/collision/limit/
+  transmission elements to ignore), checked against the mass matrix and
+  gravity torques of the planar arm it describes, computed here from the
+  centre-of-mass Jacobians (not aqs's spatial algebra).
+- every error case of the loader and of the writer.
+"""
+
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+import aqs
+from aqs import urdf as aqs_urdf
+
+
+# ---------------------------------------------------------------------------
+# Read-back
+# ---------------------------------------------------------------------------
+
+def test_body_inertial_and_joint_definition_read_back():
+    with aqs.Linkage() as L:
+        inertia = np.array([[0.3, 0.01, -0.02], [0.01, 0.25, 0.0], [-0.02, 0.0, 0.2]])
+        b0 = L.add_body(2.5, (0.1, -0.2, 0.3), inertia)
+        b1 = L.add_body(0.0, (0.0, 0.0, 0.0), np.zeros((3, 3)))
+        quat = np.array([0.8, 0.0, 0.6, 0.0]) * (1 + 3e-7)
+        L.add_joint("revolute", aqs.WORLD, b0, pos=(1, 2, 3), quat=quat, axis=(0, 3, 4))
+        L.add_joint("fixed", b0, b1, pos=(0.5, 0, 0))
+        for phase in ("building", "finalized"):
+            mass, com, I = L.body_inertial(b0)
+            assert mass == 2.5 and list(com) == [0.1, -0.2, 0.3]
+            assert np.array_equal(I, inertia)
+            d = L.joint_definition(0)
+            assert (d.kind, d.parent, d.child) == ("revolute", aqs.WORLD, b0)
+            assert list(d.pos) == [1, 2, 3]
+            assert np.allclose(d.quat, [0.8, 0, 0.6, 0], rtol=0, atol=2.3e-16)
+            assert np.allclose(d.axis, [0, 0.6, 0.8], rtol=0, atol=2.3e-16)
+            d = L.joint_definition(1)
+            assert (d.kind, d.parent, d.child) == ("fixed", b0, b1)
+            assert list(d.axis) == [0, 0, 1]  # ignored by fixed joints: documented value
+            if phase == "building":
+                L.finalize()
+        with pytest.raises(aqs.RangeError, match=r"aqs_body_get_inertial: body = 2 "):
+            L.body_inertial(2)
+        with pytest.raises(aqs.RangeError, match=r"aqs_joint_get_definition: joint = -1 "):
+            L.joint_definition(-1)
+
+
+# ---------------------------------------------------------------------------
+# Helpers
+# ---------------------------------------------------------------------------
+
+def random_rotation(rng):
+    q = rng.normal(size=4)
+    return q / np.linalg.norm(q)
+
+
+def random_inertia(rng, mass):
+    """A physical inertia: principal moments of a box, turned at random."""
+    sides = rng.uniform(0.1, 1.0, size=3)
+    moments = mass / 12.0 * np.array([sides[1] ** 2 + sides[2] ** 2,
+                                      sides[0] ** 2 + sides[2] ** 2,
+                                      sides[0] ** 2 + sides[1] ** 2])
+    r = aqs_urdf._quat_matrix(random_rotation(rng))
+    return r @ np.diag(moments) @ r.T
+
+
+def build_mixed(rng):
+    """A floating base, a fixed-base branch, every URDF-expressible type,
+    a massless body welded to a massive one, random frames and axes."""
+    L = aqs.Linkage()
+    masses = [3.0, 1.0, 1.5, 0.0, 0.7, 1.2, 0.9, 2.0, 1.1]
+    for m in masses:
+        L.add_body(m, rng.normal(size=3) * 0.3, random_inertia(rng, m) if m else np.zeros(9))
+    plan = [("free", aqs.WORLD, 0), ("revolute", 0, 1), ("prismatic", 1, 2), ("fixed", 2, 3),
+            ("revolute", 3, 4), ("planar", 4, 5), ("revolute", aqs.WORLD, 6),
+            ("fixed", 6, 7), ("prismatic", 7, 8)]
+    for kind, parent, child in plan:
+        L.add_joint(kind, parent, child, pos=rng.normal(size=3), quat=random_rotation(rng),
+                    axis=rng.normal(size=3))
+    L.finalize()
+    return L
+
+
+def apply_loads(L, rng):
+    L.set_gravity((0.3, -9.81, 0.4))
+    for b in range(L.num_bodies):
+        L.set_body_force(b, rng.normal(size=3), point=rng.normal(size=3),
+                         torque=rng.normal(size=3) * 0.2)
+    for j in range(L.num_joints):
+        n = L.joint_layout(j).nv
+        if n:
+            L.set_joint_force(j, rng.normal(size=n) * 0.5)
+
+
+def same_loads_solve(a, b, seed=7):
+    apply_loads(a, np.random.default_rng(seed))
+    apply_loads(b, np.random.default_rng(seed))
+    a.solve()
+    b.solve()
+    return a.accelerations(), b.accelerations()
+
+
+def numbers_of(path):
+    """The file as [(tag, attribute, value text)] in document order, and the
+    numbers of every numeric attribute in the same order."""
+    structure, numbers = [], []
+    for element in ET.parse(str(path)).getroot().iter():
+        for key, value in element.attrib.items():
+            try:
+                values = [float(v) for v in value.split()]
+            except ValueError:
+                values = None
+            if values:
+                structure.append((element.tag, key, len(values)))
+                numbers.extend(values)
+            else:
+                structure.append((element.tag, key, value))
+    return structure, np.array(numbers)
+
+
+def assert_same_urdf(path_a, path_b, ulps):
+    sa, na = numbers_of(path_a)
+    sb, nb = numbers_of(path_b)
+    assert sa == sb
+    assert na.shape == nb.shape
+    bound = ulps * np.finfo(float).eps * np.maximum(1.0, np.abs(na))
+    worst = np.max(np.abs(na - nb) - bound) if na.size else -1
+    assert worst <= 0, "numbers differ by more than %d ulp" % ulps
+
+
+# ---------------------------------------------------------------------------
+# Round trip
+# ---------------------------------------------------------------------------
+
+def test_save_load_save_round_trip(tmp_path):
+    rng = np.random.default_rng(2024)
+    original = build_mixed(rng)
+    first, second = tmp_path / "first.urdf", tmp_path / "second.urdf"
+    aqs.save_urdf(original, first)
+    loaded = aqs.load_urdf(first)
+    loaded.save_urdf(second)
+    # Names, types, topology and every number; numbers to 4 ulp: the rpy angles
+    # are recomputed from a quaternion renormalized by the library.
+    assert_same_urdf(first, second, ulps=4)
+    with open(first) as a, open(second) as b:
+        lines_a, lines_b = a.read().splitlines(), b.read().splitlines()
+    assert len(lines_a) == len(lines_b)
+    assert loaded.sizes() == original.sizes()
+    assert loaded.body_names == ["link_%d" % i for i in range(9)]
+    for j in range(original.num_joints):
+        d0, d1 = original.joint_definition(j), loaded.joint_definition(j)
+        assert (d0.kind, d0.parent, d0.child) == (d1.kind, d1.parent, d1.child)
+        assert np.array_equal(d0.pos, d1.pos)
+        assert np.allclose(d0.quat * np.sign(d0.quat[0]), d1.quat * np.sign(d1.quat[0]),
+                           rtol=0, atol=1e-15)
+    for b in range(original.num_bodies):
+        i0, i1 = original.body_inertial(b), loaded.body_inertial(b)
+        assert i0.mass == i1.mass and np.array_equal(i0.com, i1.com)
+        assert np.array_equal(i0.inertia, i1.inertia)
+    # The exact solve under the same loads. The models differ by a few ulp in
+    # the joint rotations (rpy round trip); on 9 bodies the accelerations then
+    # agree to ~1e-15, and 1e-12 leaves room for the conditioning of the
+    # mass matrix of random geometry.
+    qa, qb = same_loads_solve(original, loaded)
+    assert np.linalg.norm(qa - qb) <= 1e-12 * np.linalg.norm(qa)
+    assert np.linalg.norm(qa) > 1.0  # the loads do something
+    original.close()
+    loaded.close()
+
+
+def test_names_survive_load_save(tmp_path):
+    path = tmp_path / "named.urdf"
+    path.write_text("""<robot name="r">
+      <link name="world"/>
+      <link name="upper &amp; arm"><inertial><mass value="1"/>
+        <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+      <joint name="shoulder" type="continuous"><parent link="world"/>
+        <child link="upper &amp; arm"/><axis xyz="0 0 1"/></joint>
+    </robot>""")
+    L = aqs.load_urdf(path)
+    assert L.body_names == ["upper & arm"] and L.joint_names == ["shoulder"]
+    L.save_urdf(tmp_path / "again.urdf")
+    again = aqs.load_urdf(tmp_path / "again.urdf")
+    assert again.body_names == ["upper & arm"] and again.joint_names == ["shoulder"]
+
+
+def test_rpy_conventions():
+    """rpy is R = Rz(yaw) Ry(pitch) Rx(roll) (URDF), checked on the three
+    elementary rotations and on a product built from explicit matrices."""
+    def rx(a):
+        return np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+
+    def ry(a):
+        return np.array([[math.cos(a), 0, math.sin(a)], [0, 1, 0], [-math.sin(a), 0, math.cos(a)]])
+
+    def rz(a):
+        return np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        rpy = rng.uniform(-math.pi, math.pi, size=3)
+        rpy[1] = rng.uniform(-math.pi / 2, math.pi / 2)
+        expected = rz(rpy[2]) @ ry(rpy[1]) @ rx(rpy[0])
+        q = aqs_urdf.rpy_to_quat(rpy)
+        assert abs(np.linalg.norm(q) - 1) < 1e-15
+        assert np.allclose(aqs_urdf._quat_matrix(q), expected, rtol=0, atol=1e-15)
+        assert np.allclose(aqs_urdf.rpy_to_matrix(rpy), expected, rtol=0, atol=1e-15)
+        back = aqs_urdf.quat_to_rpy(q)
+        assert np.allclose(aqs_urdf.rpy_to_matrix(back), expected, rtol=0, atol=4e-15)
+    # quaternion -> rpy -> quaternion to a few ulp (up to the sign of q), for
+    # random rotations and next to the gimbal lock (pitch = +-90 degrees),
+    # where reading rpy off the rotation matrix would lose half the digits.
+    quats = [random_rotation(rng) for _ in range(2000)]
+    for pitch in (math.pi / 2, -math.pi / 2, math.pi / 2 - 1e-9, -math.pi / 2 + 1e-12):
+        quats.append(aqs_urdf.rpy_to_quat((-0.4, pitch, 0.7)))
+    for q in quats:
+        rpy = aqs_urdf.quat_to_rpy(q)
+        assert -math.pi / 2 <= rpy[1] <= math.pi / 2
+        assert abs(rpy[0]) <= math.pi and abs(rpy[2]) <= math.pi
+        again = aqs_urdf.rpy_to_quat(rpy)
+        assert min(np.abs(again - q).max(), np.abs(again + q).max()) <= 1.2e-15
+
+
+# ---------------------------------------------------------------------------
+# A URDF as a CAD exporter writes it
+# ---------------------------------------------------------------------------
+
+CAD_URDF = """<?xml version="1.0" encoding="utf-8"?>
+<!-- Exported from a CAD assembly: meshes, materials, limits, transmissions. -->
+<robot name="cad_arm">
+  <material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>
+  <link name="base_link">
+    <inertial>
+      <origin xyz="0 0 0.05" rpy="0 0 0"/>
+      <mass value="5.0"/>
+      <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/>
+    </inertial>
+    <visual><geometry><mesh filename="package://cad_arm/meshes/base.stl"/></geometry>
+      <material name="grey"/></visual>
+    <collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision>
+  </link>
+  <link name="shoulder_frame"/>
+  <link name="upper_arm">
+    <inertial>
+      <origin xyz="0.45 0.02 0" rpy="0.3 -0.2 0.5"/>
+      <mass value="2.0"/>
+      <inertia ixx="0.004" ixy="0.0001" ixz="0" iyy="0.17" iyz="0" izz="0.168"/>
+    </inertial>
+    <visual><geometry><mesh filename="package://cad_arm/meshes/upper.dae" scale="0.001 0.001 0.001"/></geometry></visual>
+  </link>
+  <link name="elbow_flange">
+    <inertial>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <mass value="0"/>
+      <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>
+    </inertial>
+  </link>
+  <link name="forearm">
+    <inertial>
+      <origin xyz="0.35 0 0.01" rpy="1.1 0.4 -0.3"/>
+      <mass value="1.2"/>
+      <inertia ixx="0.002" ixy="0" ixz="0.0002" iyy="0.05" iyz="0" izz="0.049"/>
+    </inertial>
+  </link>
+  <link name="tool0"/>
+  <link name="gripper">
+    <inertial>
+      <origin xyz="0.05 0.01 0" rpy="0 0.7 0"/>
+      <mass value="0.5"/>
+      <inertia ixx="0.0004" ixy="0" ixz="0" iyy="0.0006" iyz="0" izz="0.0005"/>
+    </inertial>
+  </link>
+  <joint name="base_to_shoulder_frame" type="fixed">
+    <origin xyz="0 0 0.1" rpy="0 0 0.25"/>
+    <parent link="base_link"/><child link="shoulder_frame"/>
+  </joint>
+  <joint name="shoulder" type="revolute">
+    <origin xyz="0 0 0" rpy="0 0 0"/>
+    <parent link="shoulder_frame"/><child link="upper_arm"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-3.14" upper="3.14" effort="150" velocity="3.15"/>
+    <dynamics damping="0.5" friction="0.1"/>
+  </joint>
+  <joint name="upper_arm_to_elbow_flange" type="fixed">
+    <origin xyz="0.9 0 0" rpy="0 0 0.4"/>
+    <parent link="upper_arm"/><child link="elbow_flange"/>
+  </joint>
+  <joint name="elbow" type="continuous">
+    <origin xyz="0 0 0" rpy="0 0 0"/>
+    <parent link="elbow_flange"/><child link="forearm"/>
+    <axis xyz="0 0 1"/>
+  </joint>
+  <joint name="forearm_to_tool0" type="fixed">
+    <origin xyz="0.7 0 0" rpy="0 0 -0.6"/>
+    <parent link="forearm"/><child link="tool0"/>
+  </joint>
+  <joint name="tool0_to_gripper" type="fixed">
+    <origin xyz="0.02 0 0" rpy="0 0 0"/>
+    <parent link="tool0"/><child link="gripper"/>
+  </joint>
+  <transmission name="shoulder_trans"><type>transmission_interface/SimpleTransmission</type>
+    <joint name="shoulder"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
+  </transmission>
+  <gazebo reference="forearm"><material>Gazebo/Grey</material></gazebo>
+</robot>
+"""
+
+
+def _rz(a):
+    return np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+
+
+def _rpy(r, p, y):
+    rx = np.array([[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]])
+    ry = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])
+    return _rz(y) @ ry @ rx
+
+
+def cad_arm_reference(gravity, tau):
+    """qdd of the CAD arm at q = 0 with zero velocity: M qdd = tau + G.
+
+    Both joints turn about the world z axis (every frame above them is turned
+    about z only), so the motion is planar: with p_k the world centre of mass
+    of rigid body k and r_i the point on joint i's axis,
+    M_ij = sum_k [m_k (z x (p_k - r_i)) . (z x (p_k - r_j)) + Izz_k] over the
+    bodies k moved by both joints, Izz_k the world zz inertia about the com,
+    and G_i = sum_k m_k g . (z x (p_k - r_i)).
+    """
+    z = np.array([0.0, 0.0, 1.0])
+    # World frames at q = 0 (base_link at the world origin, welded).
+    base_r, base_p = np.eye(3), np.zeros(3)
+    shoulder_r = base_r @ _rz(0.25)
+    shoulder_p = base_p + base_r @ np.array([0, 0, 0.1])
+    upper_r, upper_p = shoulder_r, shoulder_p
+    elbow_r = upper_r @ _rz(0.4)
+    elbow_p = upper_p + upper_r @ np.array([0.9, 0, 0])
+    fore_r, fore_p = elbow_r, elbow_p
+    tool_r = fore_r @ _rz(-0.6)
+    tool_p = fore_p + fore_r @ np.array([0.7, 0, 0])
+    grip_r, grip_p = tool_r, tool_p + tool_r @ np.array([0.02, 0, 0])
+
+    def body(mass, frame_r, frame_p, xyz, rpy, diag_and_off):
+        ixx, ixy, ixz, iyy, iyz, izz = diag_and_off
+        local = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        r = frame_r @ _rpy(*rpy)
+        return mass, frame_p + frame_r @ np.array(xyz), (r @ local @ r.T)[2, 2]
+
+    upper = body(2.0, upper_r, upper_p, (0.45, 0.02, 0), (0.3, -0.2, 0.5),
+                 (0.004, 0.0001, 0, 0.17, 0, 0.168))
+    fore = body(1.2, fore_r, fore_p, (0.35, 0, 0.01), (1.1, 0.4, -0.3),
+                (0.002, 0, 0.0002, 0.05, 0, 0.049))
+    grip = body(0.5, grip_r, grip_p, (0.05, 0.01, 0), (0, 0.7, 0),
+                (0.0004, 0, 0, 0.0006, 0, 0.0005))
+    moved = [[upper, fore, grip], [fore, grip]]  # by the shoulder, by the elbow
+    axes_at = [shoulder_p, elbow_p]
+    M = np.zeros((2, 2))
+    G = np.zeros(2)
+    for i in range(2):
+        for k in moved[i]:
+            mass, p, izz = k
+            vi = np.cross(z, p - axes_at[i])
+            G[i] += mass * np.dot(gravity, vi)
+            for j in range(2):
+                if k in moved[j]:
+                    vj = np.cross(z, p - axes_at[j])
+                    M[i, j] += mass * np.dot(vi, vj) + izz
+    return np.linalg.solve(M, np.asarray(tau) + G)
+
+
+def test_cad_style_urdf_against_planar_arm(tmp_path):
+    path = tmp_path / "cad_arm.urdf"
+    path.write_text(CAD_URDF)
+    L = aqs.load_urdf(path)
+    # base_link has mass: it is welded to the world by joint 0 "world_to_base_link".
+    assert L.joint_names == ["world_to_base_link", "base_to_shoulder_frame", "shoulder",
+                             "upper_arm_to_elbow_flange", "elbow", "forearm_to_tool0",
+                             "tool0_to_gripper"]
+    assert L.body_names == ["base_link", "shoulder_frame", "upper_arm", "elbow_flange",
+                            "forearm", "tool0", "gripper"]
+    assert L.sizes() == aqs.Sizes(7, 7, 2, 2)
+    assert L.joint_definition(0).kind == "fixed"
+    # The massless links are bodies of mass 0 welded to massive ones.
+    assert L.body_inertial(1).mass == 0 and L.body_inertial(5).mass == 0
+    shoulder, elbow = 2, 4
+    for gravity, tau in (((0.0, -9.81, 0.0), (0.0, 0.0)), ((1.0, 2.0, -9.81), (3.0, -1.5)),
+                         ((0.0, 0.0, 0.0), (1.0, 0.0))):
+        L.set_gravity(gravity)
+        L.set_joint_force(shoulder, [tau[0]])
+        L.set_joint_force(elbow, [tau[1]])
+        L.solve()
+        got = L.accelerations()
+        expected = cad_arm_reference(np.array(gravity), tau)
+        # Two independent double-precision computations of a 2x2 system with
+        # condition number ~1e2: agreement to 1e-12 relative.
+        assert np.linalg.norm(got - expected) <= 1e-12 * np.linalg.norm(expected), (got, expected)
+        assert np.linalg.norm(expected) > 0.1
+    # The same file with the root floating: base_link gets a free joint.
+    free = aqs.load_urdf(path, root="free")
+    assert free.joint_definition(0).kind == "free" and free.nv == 8
+    L.close()
+    free.close()
+
+
+# ---------------------------------------------------------------------------
+# Errors
+# ---------------------------------------------------------------------------
+
+LINK = """<link name="%s"><inertial><mass value="1"/>
+  <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>"""
+
+
+def joint(name, parent, child, kind="continuous", extra=""):
+    return ('<joint name="%s" type="%s"><parent link="%s"/><child link="%s"/>%s</joint>'
+            % (name, kind, parent, child, extra))
+
+
+def robot(*parts):
+    return "<robot name='bad'>%s</robot>" % "".join(parts)
+
+
+ERROR_CASES = {
+    "cycle": (robot(LINK % "a", LINK % "b", LINK % "c", joint("ab", "a", "b"),
+                    joint("bc", "b", "c"), joint("ca", "c", "a")),
+              r"cycle: every link has a parent \('a' <- 'c' <- 'b' <- 'a'\)"),
+    "detached cycle": (robot('<link name="world"/>', LINK % "a", LINK % "b", LINK % "c",
+                             joint("wa", "world", "a"), joint("bc", "b", "c"),
+                             joint("cb", "c", "b")),
+                       r"cycle not connected to the root link 'world'"),
+    "several roots": (robot('<link name="world"/>', LINK % "a", LINK % "b",
+                            joint("wa", "world", "a")),
+                      r"several root links .*'world', 'b'"),
+    "missing child link": (robot('<link name="world"/>', joint("wa", "world", "ghost")),
+                           r"joint 'wa': child link 'ghost' is not defined"),
+    "missing parent link": (robot(LINK % "a", joint("xa", "ghost", "a")),
+                            r"joint 'xa': parent link 'ghost' is not defined"),
+    "missing inertia": (robot('<link name="world"/>',
+                              '<link name="a"><inertial><mass value="2"/></inertial></link>',
+                              joint("wa", "world", "a")),
+                        r"link 'a': <inertial> has mass 2.0 but no <inertia>"),
+    "missing mass": (robot('<link name="world"/>',
+                           '<link name="a"><inertial><inertia ixx="1" ixy="0" ixz="0" '
+                           'iyy="1" iyz="0" izz="1"/></inertial></link>',
+                           joint("wa", "world", "a")),
+                     r"link 'a': <inertial> has no <mass>"),
+    "negative mass": (robot('<link name="world"/>',
+                            (LINK % "a").replace('value="1"', 'value="-1"'),
+                            joint("wa", "world", "a")),
+                      r"link 'a': mass = -1.0 is negative"),
+    "non-positive inertia": (robot('<link name="world"/>',
+                                   (LINK % "a").replace('ixx="0.1"', 'ixx="-0.1"'),
+                                   joint("wa", "world", "a")),
+                             r"link 'a': inertia .* is not positive definite"),
+    "zero inertia": (robot('<link name="world"/>',
+                           (LINK % "a").replace('0.1', '0'), joint("wa", "world", "a")),
+                     r"link 'a': inertia .* is not positive definite"),
+    "unphysical inertia": (robot('<link name="world"/>',
+                                 (LINK % "a").replace('izz="0.1"', 'izz="0.5"'),
+                                 joint("wa", "world", "a")),
+                           r"link 'a': aqs_body_add: principal moments .* triangle"),
+    "massless moving link": (robot('<link name="world"/>', '<link name="a"/>', LINK % "b",
+                                   joint("wa", "world", "a"), joint("ab", "a", "b")),
+                             r"link 'a' has no mass \(no <inertial>\) and is not welded .*"
+                             r"rigid group: 'a'"),
+    "massless welded group": (robot('<link name="world"/>', '<link name="a"/>',
+                                    '<link name="b"/>', joint("wa", "world", "a"),
+                                    joint("ab", "a", "b", kind="fixed")),
+                              r"link 'a' has no mass .* rigid group: 'a', 'b'"),
+    "unsupported type": (robot('<link name="world"/>', LINK % "a",
+                               joint("wa", "world", "a", kind="spherical")),
+                         r"joint 'wa': type = 'spherical' is not supported \(aqs loads "
+                         r"continuous, fixed, floating, planar, prismatic, revolute\)"),
+    "floating from a body": (robot('<link name="world"/>', LINK % "a", LINK % "b",
+                                   joint("wa", "world", "a"),
+                                   joint("ab", "a", "b", kind="floating")),
+                             r"joint 'ab': a floating joint must hang from the massless root"),
+    "two parents": (robot('<link name="world"/>', LINK % "a", LINK % "b",
+                          joint("wa", "world", "a"), joint("wb", "world", "b"),
+                          joint("ab", "a", "b")),
+                    r"link 'b' is the child of two joints \('wb' and 'ab'\)"),
+    "bad number": (robot('<link name="world"/>', LINK % "a",
+                         joint("wa", "world", "a", extra='<origin xyz="1 two 3"/>')),
+                   r"joint 'wa' <origin>: xyz = '1 two 3' is not 3 numbers"),
+    "non-finite number": (robot('<link name="world"/>', LINK % "a",
+                                joint("wa", "world", "a", extra='<axis xyz="0 nan 1"/>')),
+                          r"joint 'wa' <axis>: xyz = '0 nan 1' is not finite"),
+    "zero axis": (robot('<link name="world"/>', LINK % "a",
+                        joint("wa", "world", "a", extra='<axis xyz="0 0 0"/>')),
+                  r"joint 'wa': <axis xyz> is zero"),
+    "mimic": (robot('<link name="world"/>', LINK % "a",
+                    joint("wa", "world", "a", extra='<mimic joint="x"/>')),
+              r"joint 'wa': <mimic> couples joints"),
+    "duplicate link": (robot(LINK % "a", LINK % "a"), r"link 'a' is defined twice"),
+    "not a robot": ("<model/>", r"the root element is <model>, not <robot>"),
+    "not xml": ("<robot>", r"not well-formed XML"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(ERROR_CASES))
+def test_load_errors(tmp_path, case):
+    text, pattern = ERROR_CASES[case]
+    path = tmp_path / "bad.urdf"
+    path.write_text(text)
+    with pytest.raises(aqs.URDFError, match=pattern) as info:
+        aqs.load_urdf(path)
+    assert str(info.value).startswith(str(path) + ": ")
+
+
+def test_load_error_missing_file(tmp_path):
+    with pytest.raises(aqs.URDFError, match="cannot read"):
+        aqs.load_urdf(tmp_path / "nowhere.urdf")
+    with pytest.raises(aqs.URDFError, match=r"root = 'bolted' must be 'fixed' or 'free'"):
+        aqs.load_urdf(tmp_path / "nowhere.urdf", root="bolted")
+
+
+@pytest.mark.parametrize("kind", ["spherical", "universal", "cylindrical"])
+def test_save_refuses_joints_urdf_lacks(tmp_path, kind):
+    with aqs.Linkage() as L:
+        L.add_body(1.0, (0, 0, 0), np.eye(3) * 0.1)
+        L.add_joint(kind, aqs.WORLD, 0)
+        with pytest.raises(aqs.URDFError, match=r"joint 0 \('joint_0'\) is %s, which URDF "
+                                                 r"cannot express" % kind):
+            L.save_urdf(tmp_path / "x.urdf")
