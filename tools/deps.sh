@@ -14,6 +14,10 @@ for p in "${pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
 done
 command -v gcc >/dev/null && command -v g++ >/dev/null || missing+=(gcc g++)
+command -v make >/dev/null || missing+=(make)
+# A fresh Debian machine may have no Python at all: take Debian's, with pip.
+PY=${PYTHON:-python3}
+command -v "$PY" >/dev/null || missing+=(python3 python3-pip)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "deps: installing ${missing[*]}"
     SUDO=""
@@ -21,7 +25,6 @@ if [ ${#missing[@]} -gt 0 ]; then
     $SUDO apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
-PY=${PYTHON:-python3}
 pymissing=()
 $PY -c "import numpy" 2>/dev/null || pymissing+=(numpy)
 $PY -c "import pytest" 2>/dev/null || pymissing+=(pytest)
@@ -32,9 +35,27 @@ $PY -c "import wheel" 2>/dev/null || pymissing+=(wheel)
 if [ "${1:-}" = bench ]; then
     $PY -c "import matplotlib" 2>/dev/null || pymissing+=(matplotlib)
 fi
+# pip_install PKG...: from PyPI into the Python that runs the tests. Debian's
+# own python3 is "externally managed" (PEP 668) and refuses a plain
+# `pip install`; there the packages go into the user's site-packages
+# (--user --break-system-packages), which the same python3 imports.
+pip_install() {
+    if ! $PY -m pip --version >/dev/null 2>&1; then
+        echo "deps: installing python3-pip"
+        SUDO=""
+        [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+        $SUDO apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq python3-pip >/dev/null
+    fi
+    if $PY -c 'import sys, sysconfig, os; sys.exit(0 if os.path.exists(os.path.join(sysconfig.get_path("stdlib"), "EXTERNALLY-MANAGED")) else 1)'; then
+        $PY -m pip install -q --user --break-system-packages "$@"
+    else
+        $PY -m pip install -q "$@"
+    fi
+}
 if [ ${#pymissing[@]} -gt 0 ]; then
     echo "deps: pip installing ${pymissing[*]}"
-    $PY -m pip install -q "${pymissing[@]}"
+    pip_install "${pymissing[@]}"
 fi
 if [ "$peers" = 1 ]; then
     peermissing=()
@@ -42,6 +63,6 @@ if [ "$peers" = 1 ]; then
     $PY -c "import mujoco" 2>/dev/null || peermissing+=(mujoco)
     if [ ${#peermissing[@]} -gt 0 ]; then
         echo "deps: pip installing the bench peers ${peermissing[*]}"
-        $PY -m pip install -q "${peermissing[@]}"
+        pip_install "${peermissing[@]}"
     fi
 fi
