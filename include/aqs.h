@@ -335,7 +335,7 @@ typedef struct aqs_solve_stats {
     double error_bound;      /**< certified bound on the measure achieved (0 when exact) */
     int32_t computed_joints; /**< N_E: joint accelerations computed (free joints excluded) */
     int32_t counted_joints;  /**< joints that count for the measures (all but free and fixed) */
-    int32_t nodes_updated;   /**< assembly-tree nodes recomputed by the last coefficient update */
+    int32_t nodes_updated;   /**< assembly-tree nodes recomputed by the last solve, or by the last step (before its solve and after its move) */
     int32_t nodes_processed; /**< internal nodes back-substituted by the last solve */
     int32_t capped;          /**< 1 if the last solve stopped at the max_computed cap */
     int32_t reserved;        /**< 0 */

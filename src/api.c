@@ -518,10 +518,21 @@ AQS_API aqs_status aqs_body_clear_force(aqs_linkage *L, int32_t body)
 
 AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *L)
 {
+    int32_t j, k;
     CHECK_LINKAGE(L);
+    /* Body loads: update_loads refreshes the formerly loaded composites. Joint
+     * forces: only the nodes of actuated joints are marked (a scan of the nv
+     * forces, no O(N) recomputation of the tree). */
     while (L->nloaded > 0) remove_load(L, L->loaded_bodies[L->nloaded - 1]);
-    if (L->nv > 0) memset(L->tau, 0, sizeof(double) * (size_t)L->nv);
-    if (L->finalized) update_mark_all(L);
+    for (j = 0; j < L->njoints; j++) {
+        const joint_def *jd = &L->joints[j];
+        int nv = joint_nv(jd->type), actuated = 0;
+        for (k = 0; k < nv; k++)
+            if (L->tau[jd->voff + k] != 0.0) actuated = 1;
+        if (!actuated) continue;
+        memset(L->tau + jd->voff, 0, sizeof(double) * (size_t)nv);
+        if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[j]]);
+    }
     L->loads_dirty = 1;
     L->s.valid = 0;
     return AQS_OK;
@@ -632,15 +643,18 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
 {
     static const char fn[] = "aqs_linkage_step";
     aqs_status st;
+    int32_t before;
     CHECK_LINKAGE(L);
     if ((st = need_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
     if ((st = solve(L, fn)) != AQS_OK) return st;
+    before = L->t.nodes_updated; /* what the solve's update recomputed (loads changed since) */
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
     st = check_moved_positions(L, fn);
     if (st == AQS_OK) st = update_coefficients(L);
+    if (st == AQS_OK) L->t.nodes_updated += before;
     if (st != AQS_OK) {
         /* Undo: back to the positions before the step, which solved fine. */
         char msg[sizeof L->error];

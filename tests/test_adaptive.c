@@ -22,6 +22,7 @@ typedef struct {
     int nforces;
     int revolute_only;
     double mass_spread; /* masses in [1/s, s] (log-uniform) */
+    int chain;          /* every body hangs from the one before: a pure chain */
 } spec;
 
 static void random_unit_quat(uint64_t *rng, double q[4])
@@ -71,7 +72,7 @@ static aqs_linkage *random_linkage(uint64_t *rng, const spec *sp)
         } else {
             int32_t lo = (int32_t)(i - 1 - branch * branch * i);
             parent = lo + (int32_t)test_uniform(rng, 0, i - lo);
-            if (parent > i - 1) parent = i - 1;
+            if (parent > i - 1 || sp->chain) parent = i - 1;
             type = sp->revolute_only ? AQS_JOINT_REVOLUTE
                                      : kinds[(int)test_uniform(rng, 0, sizeof kinds / sizeof kinds[0])];
         }
@@ -262,7 +263,7 @@ static void test_bound_holds_random(void **state)
 {
     uint64_t rng = 12345;
     tally t = {0, 0, 0, 0};
-    int c;
+    int c, chains = 0;
     (void)state;
     for (c = 0; c < 500; c++) {
         spec sp;
@@ -273,12 +274,14 @@ static void test_bound_holds_random(void **state)
         sp.nforces = 1 + (int)test_uniform(&rng, 0, sp.nbodies < 100 ? sp.nbodies : 100);
         sp.revolute_only = 0;
         sp.mass_spread = 3.0;
+        sp.chain = c % 4 == 1; /* 125 pure chains, 25 of them up to 152 bodies long */
+        chains += sp.chain;
         L = random_linkage(&rng, &sp);
         check_bounds(L, &t, 1e-15 * solution_norm(L));
         aqs_linkage_destroy(L);
     }
-    print_message("bound: %ld checks, %ld violations, worst true/bound %.6f\n", t.checks,
-                  t.violations, t.worst_ratio);
+    print_message("bound: %ld checks (%d pure chains), %ld violations, worst true/bound %.6f\n", t.checks,
+                  chains, t.violations, t.worst_ratio);
     assert_int_equal(t.violations, 0);
     assert_true(t.checks == 500 * 4 * 21);
 }
@@ -293,7 +296,7 @@ static void test_joint_bound_kinds(void **state)
     int c, k, metric;
     (void)state;
     for (c = 0; c < 100; c++) {
-        spec sp = {2 + (int32_t)test_uniform(&rng, 0, 120), c % 3 == 0, c % 2, 5, 0, 3.0};
+        spec sp = {2 + (int32_t)test_uniform(&rng, 0, 120), c % 3 == 0, c % 2, 5, 0, 3.0, 0};
         aqs_linkage *L = random_linkage(&rng, &sp);
         assert_int_equal(aqs_linkage_set_joint_bound(L, AQS_JOINT_BOUND_SUM), AQS_OK);
         check_bounds(L, &t, 1e-15 * solution_norm(L));
@@ -326,7 +329,7 @@ static void test_joint_bound_kinds(void **state)
 static void test_cap_refine_and_outputs(void **state)
 {
     uint64_t rng = 31337;
-    spec sp = {200, 0, 1, 10, 0, 3.0};
+    spec sp = {200, 0, 1, 10, 0, 3.0, 0};
     aqs_linkage *L = random_linkage(&rng, &sp);
     int32_t nv = L->nv, nj = L->njoints, j, computed, uncomputed = 0;
     double *exact = malloc(sizeof(double) * (size_t)nv), *approx = malloc(sizeof(double) * (size_t)nv);
@@ -403,7 +406,7 @@ static void test_tree_builders(void **state)
     (void)state;
     for (c = 0; c < 60; c++) {
         uint64_t r1 = 100 + c, r2 = 100 + c;
-        spec sp = {2 + c * 3, c % 3 == 0, c % 2, 4, 0, 3.0};
+        spec sp = {2 + c * 3, c % 3 == 0, c % 2, 4, 0, 3.0, 0};
         aqs_linkage *A, *B;
         int32_t nv, maxh[2], height[2], k;
         double *qa, *qb;
@@ -498,7 +501,7 @@ static void test_hard_gravity_compensated(void **state)
     (void)state;
     for (d = 0; d < 2; d++)
         for (c = 0; c < 20; c++) {
-            spec sp = {40, 0, 1, 0, 1, 2.0};
+            spec sp = {40, 0, 1, 0, 1, 2.0, 0};
             aqs_linkage *L = random_linkage(&rng, &sp);
             int32_t nj = L->njoints, j, nv = L->nv;
             double *cf = malloc(sizeof(double) * 6 * (size_t)nj), *qdd = malloc(sizeof(double) * (size_t)nv);
@@ -608,7 +611,7 @@ static void test_hard_chain_and_mass_ratios(void **state)
         aqs_linkage_destroy(L);
     }
     for (c = 0; c < 20; c++) {
-        spec sp = {40 + 10 * (c % 3), c % 2, 1, 3, c % 4 == 0, 1e3}; /* ratios up to 1e6 */
+        spec sp = {40 + 10 * (c % 3), c % 2, 1, 3, c % 4 == 0, 1e3, 0}; /* ratios up to 1e6 */
         aqs_linkage *L = random_linkage(&rng, &sp);
         check_bounds(L, &t, MASS_RATIO_FLOOR * solution_norm(L));
         check_node_values(L);
@@ -660,8 +663,8 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
     }
 }
 
-/* Largest |a - b| relative to the largest |b|, block by block would be
- * finer; per array is what the 1e-10 criterion means here. */
+/* Largest |a - b| relative to the largest |b| of one node's block (Phi, b
+ * or the Gram matrix T^T T of one node): the 1e-10 criterion node by node. */
 static double rel_max_diff(const double *a, const double *b, int64_t n)
 {
     double d = 0, m = 0;
@@ -673,19 +676,46 @@ static double rel_max_diff(const double *a, const double *b, int64_t n)
     return m > 0 ? d / m : d;
 }
 
+/* The worst per-node relative difference between two snapshots of L's tree:
+ * Phi and b of every node, T^T T of every internal node. */
+static void per_node_diff(const aqs_linkage *L, const snapshot *a, const snapshot *b, double *dphi,
+                          double *dgram)
+{
+    const tree *t = &L->t;
+    int64_t k = 0, g = 0;
+    int32_t n;
+    *dphi = *dgram = 0;
+    for (n = 0; n < t->nnodes; n++) {
+        int64_t h = t->nodes[n].nh, c = 6 * h + 1, sz = 36 * h * h;
+        double x = rel_max_diff(a->phi_b + k, b->phi_b + k, sz);
+        if (x > *dphi) *dphi = x;
+        x = rel_max_diff(a->phi_b + k + sz, b->phi_b + k + sz, 6 * h);
+        if (x > *dphi) *dphi = x;
+        k += sz + 6 * h;
+        if (t->nodes[n].joint < 0) continue;
+        x = rel_max_diff(a->gram + g, b->gram + g, c * c);
+        if (x > *dgram) *dgram = x;
+        g += c * c;
+    }
+}
+
 /* After 1,000 adaptive steps with changing loads, every node equals a full
  * recomputation from the same positions and loads. */
 static void test_lazy_equals_eager(void **state)
 {
     uint64_t rng = 99;
-    spec sp = {300, 0, 1, 5, 0, 3.0};
+    spec sp = {300, 0, 1, 5, 0, 3.0, 0};
     aqs_linkage *L = random_linkage(&rng, &sp);
     snapshot lazy, full;
-    int step;
+    int step, partial = 0, fullupd = 0;
     double dphi, dgram;
     (void)state;
-    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -12)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -6)), AQS_OK);
     for (step = 0; step < 1000; step++) {
+        /* 2^-6 computes a part of the joints; 2^-12 most or all of them */
+        if (step % 100 == 0)
+            assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, step % 200 ? -12 : -6)),
+                             AQS_OK);
         if (step % 10 == 0) {
             double f[3] = {test_uniform(&rng, -3, 3), test_uniform(&rng, -3, 3), test_uniform(&rng, -3, 3)};
             int32_t b = (int32_t)test_uniform(&rng, 0, sp.nbodies);
@@ -702,16 +732,27 @@ static void test_lazy_equals_eager(void **state)
             assert_int_equal(aqs_joint_set_force(L, j, nv ? tau : NULL, nv), AQS_OK);
         }
         assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+        {
+            aqs_solve_stats st;
+            st.size = sizeof st;
+            assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+            partial += st.computed_joints < st.counted_joints;
+            fullupd += st.nodes_updated >= L->t.nnodes;
+        }
     }
+    /* the test is about lazy updates: the 2^-6 half of the steps at least
+     * must have been partial, and only the first update full */
+    assert_true(partial >= 500);
+    assert_int_equal(fullupd, 1);
     /* the step ended with its lazy update; bring loads set since up to date */
     assert_int_equal(update_coefficients(L), AQS_OK);
     take_snapshot(L, &lazy);
     update_mark_all(L);
     assert_int_equal(update_coefficients(L), AQS_OK);
     take_snapshot(L, &full);
-    dphi = rel_max_diff(lazy.phi_b, full.phi_b, full.nphi);
-    dgram = rel_max_diff(lazy.gram, full.gram, full.ngram);
-    print_message("lazy vs eager after 1000 steps: Phi,b %.3g  T^T T %.3g\n", dphi, dgram);
+    per_node_diff(L, &lazy, &full, &dphi, &dgram);
+    print_message("lazy vs eager after 1000 steps (%d partial): worst node Phi,b %.3g  T^T T %.3g\n", partial,
+                  dphi, dgram);
     assert_true(dphi <= 1e-10);
     assert_true(dgram <= 1e-10);
     free(lazy.phi_b);
@@ -726,7 +767,7 @@ static void test_lazy_equals_eager(void **state)
 static void test_eps_zero_trajectory(void **state)
 {
     uint64_t rng1 = 5, rng2 = 5;
-    spec sp = {120, 1, 1, 4, 0, 3.0};
+    spec sp = {120, 1, 1, 4, 0, 3.0, 0};
     aqs_linkage *A = random_linkage(&rng1, &sp), *B = random_linkage(&rng2, &sp);
     int32_t nq, step;
     double *qa, *qb, worst = 0;
@@ -791,6 +832,51 @@ static void test_cost_is_local(void **state)
         if (step == 19)
             print_message("100k chain: N_E %d, nodes updated %d, height %d, bound %.3g\n",
                           st.computed_joints, st.nodes_updated, height, st.error_bound);
+    }
+    /* Loads changing between steps: the force moves to another body, joint
+     * forces come and go, clear_forces wipes everything. N_U counts the
+     * bodies and joints whose loads changed since the last step plus the
+     * loaded bodies (re-expressed after every move); the step's two updates
+     * together stay within 2 (N_E + N_U log2 N). */
+    {
+        uint64_t rng = 77;
+        int32_t loaded = n / 3, actuated = -1;
+        for (step = 0; step < 40; step++) {
+            aqs_solve_stats st;
+            long allowed;
+            int nu = 0;
+            st.size = sizeof st;
+            if (step % 7 == 6) {
+                nu += 1 + (actuated >= 0);
+                assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+                actuated = -1;
+                loaded = -1;
+            } else {
+                int32_t b = (int32_t)test_uniform(&rng, 0, n);
+                if (loaded >= 0) {
+                    assert_int_equal(aqs_body_clear_force(L, loaded), AQS_OK);
+                    nu++;
+                }
+                assert_int_equal(aqs_body_set_force(L, b, f, NULL, NULL), AQS_OK);
+                loaded = b;
+                nu++;
+                if (step % 3 == 0) {
+                    double tau = test_uniform(&rng, -0.5, 0.5);
+                    actuated = (int32_t)test_uniform(&rng, 0, n);
+                    assert_int_equal(aqs_joint_set_force(L, actuated, &tau, 1), AQS_OK);
+                    nu++;
+                }
+            }
+            assert_int_equal(aqs_linkage_step(L, 0.05), AQS_OK);
+            assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+            nu += loaded >= 0;
+            allowed = (long)(2.0 * (st.computed_joints + nu * logn));
+            assert_true(st.nodes_updated <= allowed);
+            assert_true(st.nodes_updated < n / 50);
+            if (step == 39)
+                print_message("100k chain, changing loads: N_E %d, nodes updated %d (allowed %ld)\n",
+                              st.computed_joints, st.nodes_updated, allowed);
+        }
     }
     aqs_linkage_destroy(L);
 }

@@ -113,8 +113,8 @@ class SolveStats:
     computed_joints: joint accelerations computed (N_E; free joints excluded).
     counted_joints: joints the measures count: every joint but free ones and
         fixed ones (which have no acceleration).
-    nodes_updated: assembly-tree nodes recomputed by the last coefficient
-        update (after step(), the update that followed the move).
+    nodes_updated: assembly-tree nodes recomputed by the last solve (after
+        step(): by the update before its solve plus the one after the move).
     nodes_processed: internal tree nodes back-substituted by the solve.
     capped: True if the solve stopped at the set_max_computed cap.
     """
@@ -513,7 +513,7 @@ class Linkage:
     def step(self, dt):
         """Solve, then move every computed joint by q <- q (+) dt^2 qdd
         (aqs_linkage_step); returns the SolveStats of that solve (whose
-        nodes_updated counts the coefficient update after the move).
+        nodes_updated counts both of the step's coefficient updates).
         dt: s, > 0. Accelerations read afterwards are those of this step's solve."""
         self._call("aqs_linkage_step", float(dt))
         return self.stats()
