@@ -21,13 +21,18 @@
  *    so polytope depths are compared only in the bitwise-placed comparisons
  *    above and in test_narrowphase.c).
  * On the 2,000-body linkage the brute-force comparison runs every 20th
- * step (its cost is quadratic); lazy against full runs every step. */
+ * step (its cost is quadratic); lazy against full runs every step.
+ * lazy_persistent() (below) does the same with the lazy caches carried
+ * across moves: two identical copies, lazy queries only on one, full and
+ * brute force only on the other; it also checks what the lazy query refits
+ * after adaptive and exact steps and single-joint moves. */
 #include "testutil.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "collide.h"
 #include "linkage.h"
 #include "narrowphase.h"
 
@@ -384,6 +389,262 @@ static void test_differential_400(void **state) { differential(400, 103, 0, 1, 0
 
 static void test_differential_2000(void **state) { differential(2000, 104, 0, 20, 0); }
 
+/* ------------------------------------------------------------------------
+ * Lazy caches carried across moves.
+ *
+ * In differential() above the full query runs on the same linkage right
+ * after each lazy one, and it refits and re-caches every node: the lazy
+ * query there always starts from caches a full traversal just rebuilt. Here
+ * two copies of one random linkage (same build, same seeds) are stepped by
+ * the same calls, so their positions are equal bit for bit (asserted each
+ * step: no query changes positions). Copy 1 runs only lazy queries, one
+ * aqs_linkage_collide call per queried step, so its caches and marks carry
+ * over from step to step and the contacts it returns come from the very
+ * query that refitted the moved nodes; copy 2 runs only full and brute-force
+ * queries. About 1 step in 10 is not queried on either copy, so moves also
+ * accumulate between lazy queries. Contacts must be the same pairs with
+ * depths, normals and points equal to 1e-9 (same_contacts: both copies place
+ * shapes by the same operations on the same bits, so they agree to rounding).
+ * On copy 1, after each queried step following a queried step:
+ *  - adaptive step: nodes_refit == nodes_processed of the step's solve
+ *    (docs/collision.md: the marks are the processed nodes; the previous
+ *    query cleared all marks, and refit counts every marked internal node);
+ *  - exact step: nodes_refit == every internal node;
+ *  - aqs_joint_set_position: nodes_refit == the joint's node and its
+ *    ancestors.
+ * Against vacuity: contacts occur, the contact set changes between queries,
+ * some adaptive steps are local (processed < internal nodes), and cached
+ * contacts are replayed (nodes cached with contacts and not moved at the
+ * time of a lazy query, read from the internal state). */
+
+#define LAZY_CAP 65536 /* contacts per query: far above what these scenes reach */
+
+/* One query in a single call into buf (LAZY_CAP contacts), sorted: for the
+ * lazy copy a second call would be a pure replay. */
+static size_t query_once(aqs_linkage *L, int32_t mode, aqs_contact *buf)
+{
+    size_t count = 0;
+    assert_int_equal(aqs_linkage_collide(L, mode, buf, LAZY_CAP, &count), AQS_OK);
+    qsort(buf, count, sizeof(aqs_contact), cmp_contact);
+    return count;
+}
+
+/* Nodes whose cached contacts the next lazy query replays. */
+static int32_t replayable(const aqs_linkage *L)
+{
+    const collision *c = L->col;
+    int32_t n, k = 0;
+    if (!c || !c->built) return 0;
+    for (n = 0; n < L->t.nnodes; n++)
+        if (L->t.nodes[n].joint >= 0 && c->cached[n] && !c->moved[n] && c->ncont[n] > 0) k++;
+    return k;
+}
+
+/* Internal nodes on the path from joint j's node to the root. */
+static int32_t path_to_root(const aqs_linkage *L, int32_t j)
+{
+    int32_t n = L->t.node_of_eff[L->m.eff_of_joint[j]], k = 0;
+    for (; n >= 0; n = L->t.nodes[n].parent) k++;
+    return k;
+}
+
+static int same_pairs(const aqs_contact *a, size_t na, const aqs_contact *b, size_t nb)
+{
+    size_t i;
+    if (na != nb) return 0;
+    for (i = 0; i < na; i++)
+        if (a[i].shape_a != b[i].shape_a || a[i].shape_b != b[i].shape_b) return 0;
+    return 1;
+}
+
+static void lazy_persistent(int32_t n, uint64_t seed, int joined, int steps, int brute_every)
+{
+    scene S1, S2;
+    aqs_linkage *L1 = build(&S1, n, seed, joined), *L2 = build(&S2, n, seed, joined);
+    aqs_contact *lazy = calloc(LAZY_CAP, sizeof(aqs_contact)), *prev = calloc(LAZY_CAP, sizeof(aqs_contact));
+    aqs_contact *other = calloc(LAZY_CAP, sizeof(aqs_contact));
+    uint64_t st = seed * 13 + 5;
+    int32_t nq, internal = -1, refit, sk, step;
+    double *q1, *q2;
+    size_t nprev = 0;
+    int prev_queried = 0, with_contacts = 0, changes = 0, local = 0, adaptive_checked = 0, replays = 0;
+    long skipped = 0;
+    assert_int_equal(aqs_linkage_get_sizes(L1, NULL, NULL, &nq, NULL), AQS_OK);
+    q1 = calloc((size_t)nq + 1, sizeof(double));
+    q2 = calloc((size_t)nq + 1, sizeof(double));
+    for (step = 0; step <= steps; step++) {
+        /* kind: 0 first query, 1 adaptive step, 2 exact step, 3 one joint set */
+        int kind = 0, query_now = 1;
+        int32_t moved_joint = -1;
+        aqs_solve_stats ss;
+        size_t nl, nf, nb;
+        if (step > 0) {
+            double u = test_uniform(&st, 0, 1);
+            if (step % 25 == 0) { /* new loads on a few bodies, the same on both copies */
+                int32_t k;
+                for (k = 0; k < 5; k++) {
+                    int32_t b = (int32_t)(test_uniform(&st, 0, 1) * n);
+                    double f[3] = {test_uniform(&st, -8, 8), test_uniform(&st, -8, 8), test_uniform(&st, -8, 8)};
+                    assert_int_equal(aqs_body_set_force(L1, b, f, NULL, NULL), AQS_OK);
+                    assert_int_equal(aqs_body_set_force(L2, b, f, NULL, NULL), AQS_OK);
+                }
+            }
+            if (u < 0.92) {
+                /* adaptive steps from nearly global (1/512: ~98% of the nodes
+                 * processed on the 2,000-body scene) to local (1/2: ~15%) */
+                double eps = u < 0.24 ? 1.0 / 512 : u < 0.48 ? 1.0 / 8 : u < 0.72 ? 0.5 : 0.0, dt;
+                kind = eps > 0.0 ? 1 : 2;
+                assert_int_equal(aqs_linkage_set_tolerance(L1, AQS_METRIC_REL_JOINT, eps), AQS_OK);
+                assert_int_equal(aqs_linkage_set_tolerance(L2, AQS_METRIC_REL_JOINT, eps), AQS_OK);
+                /* dt from copy 1's solve (a solve starts from scratch: the step's
+                 * own solve on copy 2 is the same; positions are compared below) */
+                dt = step_dt(L1, 0.02);
+                assert_int_equal(aqs_linkage_step(L1, dt), AQS_OK);
+                assert_int_equal(aqs_linkage_step(L2, dt), AQS_OK);
+            } else {
+                int32_t j = (int32_t)(test_uniform(&st, 0, 1) * n);
+                double qj = test_uniform(&st, -1, 1);
+                if (S1.jtype[j] == AQS_JOINT_REVOLUTE) {
+                    kind = 3;
+                    moved_joint = j;
+                    assert_int_equal(aqs_joint_set_position(L1, j, &qj, 1), AQS_OK);
+                    assert_int_equal(aqs_joint_set_position(L2, j, &qj, 1), AQS_OK);
+                }
+            }
+            query_now = test_uniform(&st, 0, 1) >= 0.1;
+        }
+        assert_int_equal(aqs_linkage_get_positions(L1, q1, (size_t)nq), AQS_OK);
+        assert_int_equal(aqs_linkage_get_positions(L2, q2, (size_t)nq), AQS_OK);
+        assert_memory_equal(q1, q2, (size_t)nq * sizeof(double));
+        if (!query_now) {
+            prev_queried = 0;
+            continue;
+        }
+        /* copy 1: the lazy query only */
+        replays += replayable(L1);
+        nl = query_once(L1, AQS_COLLIDE_LAZY, lazy);
+        assert_int_equal(aqs_linkage_get_collision_stats(L1, &refit, NULL, NULL, &sk), AQS_OK);
+        skipped += sk;
+        /* copy 2: full (it refits every internal node) and brute force */
+        nf = query_once(L2, AQS_COLLIDE_FULL, other);
+        if (internal < 0) assert_int_equal(aqs_linkage_get_collision_stats(L2, &internal, NULL, NULL, NULL), AQS_OK);
+        same_contacts(lazy, nl, other, nf);
+        if (step % brute_every == 0) {
+            nb = query_once(L2, AQS_COLLIDE_BRUTE, other);
+            same_contacts(lazy, nl, other, nb);
+        }
+        /* what the lazy query refitted */
+        if (prev_queried && kind == 1) {
+            memset(&ss, 0, sizeof ss);
+            ss.size = sizeof ss;
+            assert_int_equal(aqs_linkage_get_stats(L1, &ss), AQS_OK);
+            if (refit != ss.nodes_processed) {
+                print_error("step %d: lazy query refitted %d nodes, the adaptive step processed %d\n", step,
+                            (int)refit, (int)ss.nodes_processed);
+                fail();
+            }
+            adaptive_checked++;
+            if (ss.nodes_processed < internal) local++;
+        } else if (prev_queried && kind == 2) {
+            assert_int_equal(refit, internal);
+        } else if (prev_queried && kind == 3) {
+            assert_int_equal(refit, path_to_root(L1, moved_joint));
+        } else if (prev_queried && step > 0) { /* nothing moved (a non-revolute joint was drawn) */
+            assert_int_equal(refit, 0);
+        }
+        if (nl > 0) with_contacts++;
+        if (step > 0 && !same_pairs(lazy, nl, prev, nprev)) changes++;
+        memcpy(prev, lazy, nl * sizeof(aqs_contact));
+        nprev = nl;
+        prev_queried = 1;
+    }
+    print_message("%d bodies, lazy-only copy: %d queries with contacts, %d contact-set changes, "
+                  "%d adaptive refits checked (%d local), %d cached nodes replayed, %ld skipped\n",
+                  (int)n, with_contacts, changes, adaptive_checked, local, replays, skipped);
+    assert_true(internal > 0);
+    assert_true(with_contacts > 0);
+    assert_true(changes > 0);
+    assert_true(adaptive_checked > 0);
+    assert_true(local > 0);
+    assert_true(replays > 0);
+    assert_true(skipped > 0);
+    free(q1);
+    free(q2);
+    free(lazy);
+    free(prev);
+    free(other);
+    aqs_linkage_destroy(L1);
+    aqs_linkage_destroy(L2);
+    free_scene(&S1);
+    free_scene(&S2);
+}
+
+static void test_lazy_persistent_60(void **state)
+{
+    lazy_persistent(60, 201, 0, 200, 1);
+    lazy_persistent(60, 202, 1, 200, 1);
+}
+
+static void test_lazy_persistent_400(void **state) { lazy_persistent(400, 203, 0, 200, 1); }
+
+/* 100 steps, brute force every 10th: the 200 steps of the smaller scenes
+ * would take ~10 s here (a lazy query costs ~150,000 sphere tests on this
+ * tangled scene, a full one as much). */
+static void test_lazy_persistent_2000(void **state) { lazy_persistent(2000, 204, 0, 100, 10); }
+
+/* A local move: no gravity, one load on one body, REL_JOINT 1/64. After each
+ * adaptive step the lazy query refits exactly the processed nodes (the
+ * marks left by the step; the previous query cleared all), a small part of
+ * the tree (measured: 88 of 1,662 internal nodes; asserted < 1/4), and
+ * returns what brute force returns (brute force refits the moved nodes but
+ * leaves the caches alone, so the lazy caches still persist here). An exact
+ * step then refits every internal node. */
+static void test_adaptive_refit_is_local(void **state)
+{
+    scene S;
+    aqs_linkage *L = build(&S, 2000, 205, 0);
+    aqs_contact *lazy = calloc(LAZY_CAP, sizeof(aqs_contact)), *bf = calloc(LAZY_CAP, sizeof(aqs_contact));
+    const double zero[3] = {0, 0, 0}, f[3] = {0, 3, 1};
+    int32_t internal = -1, refit, sk, k;
+    aqs_solve_stats ss;
+    size_t nl, nb;
+    assert_int_equal(aqs_linkage_set_gravity(L, zero), AQS_OK);
+    assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+    assert_int_equal(aqs_body_set_force(L, 1500, f, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1.0 / 64), AQS_OK);
+    (void)query_once(L, AQS_COLLIDE_FULL, lazy);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &internal, NULL, NULL, NULL), AQS_OK);
+    assert_true(internal > 1000);
+    (void)query_once(L, AQS_COLLIDE_LAZY, lazy);
+    for (k = 0; k < 5; k++) {
+        assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+        memset(&ss, 0, sizeof ss);
+        ss.size = sizeof ss;
+        assert_int_equal(aqs_linkage_get_stats(L, &ss), AQS_OK);
+        nl = query_once(L, AQS_COLLIDE_LAZY, lazy);
+        assert_int_equal(aqs_linkage_get_collision_stats(L, &refit, NULL, NULL, &sk), AQS_OK);
+        assert_true(ss.nodes_processed > 0);
+        assert_int_equal(refit, ss.nodes_processed);
+        assert_true(4 * refit < internal);
+        if (k == 0) print_message("local move: %d of %d internal nodes refitted\n", (int)refit, (int)internal);
+        assert_true(sk > 0);
+        nb = query_once(L, AQS_COLLIDE_BRUTE, bf);
+        assert_true(nl > 0);
+        same_contacts(lazy, nl, bf, nb);
+    }
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    nl = query_once(L, AQS_COLLIDE_LAZY, lazy);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &refit, NULL, NULL, NULL), AQS_OK);
+    assert_int_equal(refit, internal);
+    nb = query_once(L, AQS_COLLIDE_BRUTE, bf);
+    same_contacts(lazy, nl, bf, nb);
+    free(lazy);
+    free(bf);
+    aqs_linkage_destroy(L);
+    free_scene(&S);
+}
+
 /* A query right after another, with nothing moved, refits nothing. */
 static void test_idle_query_refits_nothing(void **state)
 {
@@ -443,6 +704,10 @@ int main(void)
         cmocka_unit_test(test_differential_60),
         cmocka_unit_test(test_differential_400),
         cmocka_unit_test(test_differential_2000),
+        cmocka_unit_test(test_lazy_persistent_60),
+        cmocka_unit_test(test_lazy_persistent_400),
+        cmocka_unit_test(test_lazy_persistent_2000),
+        cmocka_unit_test(test_adaptive_refit_is_local),
         cmocka_unit_test(test_idle_query_refits_nothing),
         cmocka_unit_test(test_cache_overflow),
     };
