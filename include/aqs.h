@@ -278,6 +278,22 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *linkage);
  *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENUMERIC. */
 AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
 
+/** Which algorithm computes an exact solve (eps = 0 and no cap).
+ *  AQS_EXACT_ABA (default): Featherstone's articulated-body algorithm over
+ *  the joints, O(N) with a small constant; it leaves the assembly tree's
+ *  coefficients stale (an adaptive solve recomputes them first, once), so an
+ *  exact step reports nodes_updated = 0. AQS_EXACT_DCA: the full
+ *  divide-and-conquer back-substitution over the assembly tree, recomputing
+ *  the tree after every step (the paper's exact solver; its per-node time is
+ *  the benchmarks' reference for the adaptive solve). Both give the same
+ *  accelerations and constraint forces up to rounding. Any phase; the
+ *  choice takes effect at the next solve. Returns AQS_OK, AQS_EINVAL. */
+#define AQS_EXACT_ABA 0
+#define AQS_EXACT_DCA 1
+AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *linkage, int32_t solver);
+/** The current AQS_EXACT_* choice into *solver. Returns AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *linkage, int32_t *solver);
+
 /* ------------------------------------------------------------------------
  * Error-bounded adaptive solving (Redon & Lin; MATH.md §4-6)
  * ---------------------------------------------------------------------- */

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "aba.h"
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
@@ -158,6 +159,7 @@ AQS_API aqs_status aqs_linkage_create(aqs_linkage **out)
 
 static void free_solver(aqs_linkage *L)
 {
+    aba_free(L);
     adaptive_free(L);
     totalacc_free(L);
     assembly_free(L);
@@ -203,6 +205,29 @@ AQS_API aqs_status aqs_linkage_set_inertia_check(aqs_linkage *L, int32_t physica
     if (physical != 0 && physical != 1)
         return lk_fail(L, AQS_EINVAL, "%s: physical = %d must be 0 or 1", fn, (int)physical);
     L->lax_inertia = !physical;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *L, int32_t solver)
+{
+    static const char fn[] = "aqs_linkage_set_exact_solver";
+    CHECK_LINKAGE(L);
+    if (solver != AQS_EXACT_ABA && solver != AQS_EXACT_DCA)
+        return lk_fail(L, AQS_EINVAL, "%s: solver = %d is not an AQS_EXACT_* value", fn, (int)solver);
+    if (solver != L->exact_solver) {
+        L->exact_solver = solver;
+        L->s.valid = 0;
+    }
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *L, int32_t *solver)
+{
+    static const char fn[] = "aqs_linkage_get_exact_solver";
+    aqs_linkage *ml = (aqs_linkage *)L;
+    CHECK_LINKAGE(ml);
+    CHECK_PTR(ml, fn, solver);
+    *solver = L->exact_solver;
     return AQS_OK;
 }
 
@@ -392,7 +417,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     L->welded_acc = lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double));
     L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
     if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world ||
-        adaptive_alloc(L) != AQS_OK) {
+        adaptive_alloc(L) != AQS_OK || aba_alloc(L) != AQS_OK) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
@@ -585,11 +610,28 @@ static aqs_status check_outputs(aqs_linkage *L, const char *fn)
     return st;
 }
 
+/* An exact solve goes through the articulated-body algorithm unless the
+ * DCA was chosen; a linkage that cannot move keeps the adaptive path. */
+static int exact_by_aba(const aqs_linkage *L)
+{
+    return L->exact_solver == AQS_EXACT_ABA && L->s.eps == 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
+}
+
 static aqs_status solve(aqs_linkage *L, const char *fn)
 {
     aqs_status st;
-    if ((st = update_coefficients(L)) != AQS_OK) return st;
-    adaptive_solve(L);
+    L->exact_by_aba = 0;
+    if (exact_by_aba(L)) {
+        if ((st = aba_solve(L)) != AQS_OK) {
+            L->solved = 0;
+            L->s.valid = 0;
+            return st;
+        }
+        L->exact_by_aba = 1;
+    } else {
+        if ((st = update_coefficients(L)) != AQS_OK) return st;
+        adaptive_solve(L);
+    }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         L->solved = 0;
         L->s.valid = 0;
@@ -653,7 +695,11 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
     st = check_moved_positions(L, fn);
-    if (st == AQS_OK) st = update_coefficients(L);
+    /* After an exact solve by the articulated-body algorithm the tree's
+     * coefficients are left stale (every node is marked): the next
+     * articulated-body solve does not need them, an adaptive one recomputes
+     * them first. */
+    if (st == AQS_OK && !L->exact_by_aba) st = update_coefficients(L);
     if (st == AQS_OK) L->t.nodes_updated += before;
     if (st != AQS_OK) {
         /* Undo: back to the positions before the step, which solved fine. */
@@ -663,7 +709,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         update_all_poses(L);
         update_mark_all(L);
         L->loads_dirty = 1;
-        (void)update_coefficients(L);
+        if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
     return st;

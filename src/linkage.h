@@ -124,6 +124,17 @@ typedef struct {
     int capped;           /* stopped by max_computed */
 } solve_state;
 
+/* The exact solve by the articulated-body algorithm (src/aba.c): scratch
+ * sized at finalize, rewritten by every such solve. */
+typedef struct {
+    int32_t *order; /* ne effective joints, each after its parent composite's joint */
+    double *IA;     /* ncomp x 36: articulated inertia of the composite's subtree, its frame */
+    double *pA;     /* ncomp x 6: bias force of the subtree (minus the loads), its frame */
+    double *acc;    /* (ncomp + 1) x 6: acceleration minus g (root trick); world last */
+    double *U;      /* nv x 6: row k of joint e is IA S_k (S_k: dof k's column of S) */
+    double *u;      /* nv: Q - S^T pA */
+} aba_state;
+
 struct aqs_linkage {
     aqs_alloc_fn alloc;
     aqs_free_fn free_fn;
@@ -157,6 +168,9 @@ struct aqs_linkage {
     double *q_saved;  /* nq: positions before a step, to undo a failed one */
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
+    int32_t exact_solver; /* AQS_EXACT_* */
+    int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
+    aba_state aba;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
 };

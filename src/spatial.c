@@ -250,14 +250,60 @@ void spatial_inertia(double m, const double c[3], const double Ic[9], double I[3
     put_block(I, 1, 1, mI);
 }
 
+/* out (3x3, stride 3) = R S R^T for a 3x3 block S stored with row stride 6;
+ * a symmetric block (sym) is formed from its upper triangle and mirrored. */
+static void rot_block_to_parent(const double *R, const double *S, double *out, int sym)
+{
+    double T[9];
+    int i, j, k;
+    for (i = 0; i < 3; i++) /* T = S R^T */
+        for (j = 0; j < 3; j++) T[3 * i + j] = S[6 * i] * R[3 * j] + S[6 * i + 1] * R[3 * j + 1] + S[6 * i + 2] * R[3 * j + 2];
+    for (i = 0; i < 3; i++)
+        for (j = sym ? i : 0; j < 3; j++) {
+            double v = 0.0;
+            for (k = 0; k < 3; k++) v += R[3 * i + k] * T[3 * k + j];
+            out[3 * i + j] = v;
+            if (sym) out[3 * j + i] = v;
+        }
+}
+
 void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36])
 {
-    /* X* = X^{-T}; with Xi = motion transform G -> F, X* = Xi^T. */
-    double Xi[36], T[36];
-    spatial_from_parent(P, Xi);
-    dense_mul_tn(Xi, IF, T, 6, 6, 6); /* Xi^T IF */
-    dense_mul(T, Xi, IG, 6, 6, 6);    /* (Xi^T IF) Xi */
-    dense_symmetrize(IG, 6);
+    /* X* IF X*^T = X^T IF X with X = spatial_from_parent(P) = diag(R^T, R^T)
+     * [1 0; -p~ 1]. With IF = [A B; B^T C], rotate the blocks (A' = R A R^T,
+     * B' = R B R^T, C' = R C R^T), then shift the reference point:
+     * IG = [A' + K + K^T - p~ C' p~,  B' + p~ C';  (B' + p~ C')^T,  C'],
+     * K = p~ B'^T. Any symmetric IF (articulated inertias too); the result is
+     * exactly symmetric. */
+    const double *p = P->p;
+    double A[9], B[9], C[9], E[9], K[9], px[9];
+    int i, j, k;
+    rot_block_to_parent(P->R, IF, A, 1);
+    rot_block_to_parent(P->R, IF + 3, B, 0);
+    rot_block_to_parent(P->R, IF + 21, C, 1);
+    skew(p, px);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double e = B[3 * i + j], kk = 0.0;
+            for (k = 0; k < 3; k++) {
+                e += px[3 * i + k] * C[3 * k + j];  /* B' + p~ C' */
+                kk += px[3 * i + k] * B[3 * j + k]; /* p~ B'^T */
+            }
+            E[3 * i + j] = e;
+            K[3 * i + j] = kk;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            /* (p~ C' p~)_ij = sum_k (p~ C')_ik p~_kj, with p~ C' = E - B' */
+            double v = A[3 * i + j] + K[3 * i + j] + K[3 * j + i];
+            for (k = 0; k < 3; k++) v -= (E[3 * i + k] - B[3 * i + k]) * px[3 * k + j];
+            IG[6 * i + j] = IG[6 * j + i] = v;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            IG[6 * i + 3 + j] = IG[6 * (3 + j) + i] = E[3 * i + j];
+            IG[6 * (3 + i) + 3 + j] = C[3 * i + j];
+        }
 }
 
 void spatial_xform_motion(const pose *P, const double v[6], double out[6])

@@ -48,6 +48,11 @@ static aqs_linkage *random_linkage(uint64_t *rng, const spec *sp)
                                     AQS_JOINT_FIXED, AQS_JOINT_REVOLUTE, AQS_JOINT_REVOLUTE};
     double branch = test_uniform(rng, 0, 1);
     assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    /* The exact reference of these tests is the DCA back-substitution over
+     * the same coefficients as the adaptive one, so that a difference is
+     * truncation alone; the articulated-body solver (the default) is checked
+     * against the DCA and the dense reference in tests/reference. */
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
     for (i = 0; i < sp->nbodies; i++) {
         double m = exp(test_uniform(rng, -log(sp->mass_spread), log(sp->mass_spread)));
         double com[3], I[9] = {0}, a = test_uniform(rng, 0.5, 1.5), b = test_uniform(rng, 0.5, 1.5);
@@ -420,6 +425,7 @@ static void test_tree_builders(void **state)
             double *q;
             assert_int_equal(aqs_linkage_create(&B), AQS_OK);
             assert_int_equal(aqs_linkage_set_tree_builder(B, AQS_TREE_BISECTION), AQS_OK);
+            assert_int_equal(aqs_linkage_set_exact_solver(B, AQS_EXACT_DCA), AQS_OK); /* as random_linkage */
             for (i = 0; i < src->nbodies; i++)
                 assert_int_equal(aqs_body_add(B, src->bodies[i].mass, src->bodies[i].com,
                                               src->bodies[i].inertia, NULL), AQS_OK);
@@ -772,6 +778,7 @@ static void test_eps_zero_trajectory(void **state)
     int32_t nq, step;
     double *qa, *qb, worst = 0;
     (void)state;
+    assert_int_equal(aqs_linkage_set_exact_solver(A, AQS_EXACT_ABA), AQS_OK);
     assert_int_equal(aqs_linkage_set_max_computed(B, 1 << 30), AQS_OK);
     assert_int_equal(aqs_linkage_get_sizes(A, NULL, NULL, &nq, NULL), AQS_OK);
     qa = malloc(sizeof(double) * (size_t)nq);

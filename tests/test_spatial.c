@@ -571,6 +571,31 @@ static void test_inertia_transform(void **state)
             assert_true(fabs(dot(vG, IGv, 6) - e) < TOL * 10 * (1 + e));
         }
     }
+    /* Any symmetric 6x6 (an articulated inertia is not a rigid body's):
+     * X^T IF X with X = spatial_from_parent(P), by plain 6x6 products. */
+    for (k = 0; k < 300; k++) {
+        double IF[36], IG[36], X[36], T[36], ref[36];
+        pose P;
+        int i, j, r;
+        for (i = 0; i < 6; i++)
+            for (j = i; j < 6; j++) IF[6 * i + j] = IF[6 * j + i] = test_uniform(&s, -2, 2);
+        random_pose(&s, &P);
+        spatial_inertia_to_parent(&P, IF, IG);
+        spatial_from_parent(&P, X);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                T[6 * i + j] = 0;
+                for (r = 0; r < 6; r++) T[6 * i + j] += IF[6 * i + r] * X[6 * r + j]; /* IF X */
+            }
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                ref[6 * i + j] = 0;
+                for (r = 0; r < 6; r++) ref[6 * i + j] += X[6 * r + i] * T[6 * r + j]; /* X^T (IF X) */
+            }
+        assert_close(IG, ref, 36);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) assert_true(IG[6 * i + j] == IG[6 * j + i]);
+    }
 }
 
 int main(void)

@@ -242,8 +242,15 @@ def test_exact_by_default_and_with_eps_zero():
         stats = L.solve()
         assert stats.metric == "abs_linkage" and stats.eps == 0.0 and stats.error_bound == 0.0
         assert stats.computed_joints == stats.counted_joints == len(counted(case))
-        assert not stats.capped and stats.nodes_updated > 0 and stats.nodes_processed > 0
+        # the default exact solver, the articulated-body algorithm, touches no tree node
+        assert L.exact_solver == "aba"
+        assert not stats.capped and stats.nodes_updated == 0 and stats.nodes_processed == 0
         assert np.array_equal(L.accelerations(), acc)
+        L.set_exact_solver("dca")  # the full DCA back-substitution over the tree
+        stats = L.solve()
+        assert L.exact_solver == "dca" and stats.nodes_processed > 0 and stats.error_bound == 0.0
+        assert rel_err(L.accelerations(), acc) <= SAME
+        L.set_exact_solver(aqs.EXACT_ABA)
         assert all(L.joint_computed(k) for k in range(len(case["joints"])))
         L.set_tolerance("rel_joint", 2.0 ** -5)
         assert L.solve().computed_joints < len(counted(case))
@@ -431,11 +438,15 @@ def test_step_returns_the_stats_of_its_solve():
     with build(aqs, case) as L:
         stats = L.step(1e-3)
         assert isinstance(stats, aqs.SolveStats) and stats == L.stats()
-        assert stats.nodes_updated > 0 and stats.error_bound == 0.0
+        # the articulated-body algorithm leaves the tree alone
+        assert stats.nodes_updated == 0 and stats.error_bound == 0.0
         assert stats.computed_joints == stats.counted_joints
         assert np.array_equal(L.accelerations(), acc)  # the solve at the start of the step
-        stats = L.step(1e-3)
-        assert stats.nodes_updated > 0
+        L.set_exact_solver("dca")
+        nodes = L.tree_stats()["nodes"]
+        # the DCA brings the stale tree up to date before solving, and recomputes it after the move
+        assert L.step(1e-3).nodes_updated == 2 * nodes
+        assert L.step(1e-3).nodes_updated == nodes
 
 
 def test_adaptive_step_moves_only_computed_joints():
@@ -633,6 +644,7 @@ def test_tree_builders_agree():
     for builder in ("contraction", "bisection"):
         with aqs.Linkage() as L:
             L.set_tree_builder(builder)
+            L.set_exact_solver("dca")  # the exact solve that goes through the tree
             prev = aqs.WORLD
             for i in range(50):
                 b = L.add_body(1.0, (0.5, 0, 0), np.diag([0.01, 0.1, 0.1]))
@@ -650,3 +662,58 @@ def test_tree_builders_agree():
     with aqs.Linkage() as L:
         with pytest.raises(aqs.InvalidArgument):
             L.set_tree_builder("random")
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_exact_solvers_agree(name):
+    """The articulated-body algorithm (default) and the DCA back-substitution
+    give the same accelerations and constraint forces (1e-10 relative: two
+    rounding histories; constraint forces with the floor of exact()), and the
+    same trajectory over 20 exact steps (1e-10)."""
+    case, _, _ = exact(name)
+    out = {}
+    for solver in ("aba", "dca"):
+        with build(aqs, case) as L:
+            L.set_exact_solver(solver)
+            L.solve()
+            acc, forces = L.accelerations().copy(), L.constraint_forces().copy()
+            for _ in range(20):
+                stats = L.step(0.05)
+                assert stats.error_bound == 0.0
+                assert (stats.nodes_updated == 0) == (solver == "aba")
+            out[solver] = acc, forces, L.positions().copy()
+    weight = sum(b["mass"] for b in case["bodies"]) * (1 + np.linalg.norm(case["gravity"]))
+    assert rel_err(out["aba"][0], out["dca"][0]) <= 1e-10
+    assert rel_err(out["aba"][1], out["dca"][1], floor=1e-9 * weight) <= 1e-10
+    assert rel_err(out["aba"][2], out["dca"][2]) <= 1e-10
+
+
+def test_exact_solver_switching_keeps_the_tree_right():
+    """Exact steps by the articulated-body algorithm leave the tree stale; an
+    adaptive solve afterwards recomputes it and agrees with a linkage that
+    took the same steps with the DCA."""
+    case, _, _ = exact("chain-300-tip-load")
+    result = []
+    for solver in ("aba", "dca"):
+        with build(aqs, case) as L:
+            L.set_exact_solver(solver)
+            for _ in range(5):
+                L.step(0.1)
+            L.set_tolerance("rel_joint", 2.0 ** -10)
+            stats = L.solve()
+            result.append((L.accelerations().copy(), stats.computed_joints, stats.error_bound))
+    assert result[0][1] == result[1][1]
+    assert rel_err(result[0][0], result[1][0]) <= 1e-10
+    assert abs(result[0][2] - result[1][2]) <= 1e-10 * result[1][2]
+
+
+def test_exact_solver_errors():
+    with aqs.Linkage() as L:
+        assert L.exact_solver == "aba"
+        with pytest.raises(aqs.InvalidArgument, match="solver"):
+            L.set_exact_solver("lu")
+        with pytest.raises(aqs.InvalidArgument, match="solver = 7"):
+            L.set_exact_solver(7)
+        assert L.exact_solver == "aba"
+        L.set_exact_solver(aqs.EXACT_DCA)  # before finalize too
+        assert L.exact_solver == "dca"

@@ -93,6 +93,8 @@ def test_constants_match(header):
         short = name[len("AQS_"):]
         if short.startswith("TREE_"):
             assert aqs.TREE_BUILDERS[short[len("TREE_"):].lower()] == int(value), name
+        if short.startswith("EXACT_"):
+            assert aqs.EXACT_SOLVERS[short[len("EXACT_"):].lower()] == int(value), name
         if short.startswith("JOINT_BOUND_"):
             assert aqs.JOINT_BOUNDS[short[len("JOINT_BOUND_"):].lower()] == int(value), name
         elif short.startswith("JOINT_"):
@@ -100,11 +102,12 @@ def test_constants_match(header):
         if short.startswith("METRIC_"):
             assert aqs.METRICS[short[len("METRIC_"):].lower()] == int(value), name
         assert getattr(aqs, short) == int(value), name
-    codes = {int(v) for k, v in defines.items() if k in ("AQS_OK",) or k.startswith("AQS_E")}
+    codes = {int(v) for k, v in defines.items()
+             if k in ("AQS_OK",) or (k.startswith("AQS_E") and not k.startswith("AQS_EXACT_"))}
     assert codes == set(_lib.STATUS_NAMES)
     assert set(aqs._errors.BY_STATUS) == codes - {0}
     for prefix, table in (("AQS_JOINT_BOUND_", aqs.JOINT_BOUNDS), ("AQS_METRIC_", aqs.METRICS),
-                          ("AQS_TREE_", aqs.TREE_BUILDERS)):
+                          ("AQS_TREE_", aqs.TREE_BUILDERS), ("AQS_EXACT_", aqs.EXACT_SOLVERS)):
         assert len(table) == sum(k.startswith(prefix) for k in defines), prefix
     kinds = [k for k in defines if k.startswith("AQS_JOINT_") and "BOUND" not in k]
     assert len(aqs.JOINT_KINDS) == len(kinds)

@@ -41,6 +41,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
+                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
@@ -56,6 +57,7 @@ __all__ = [
     "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
+    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
@@ -552,6 +554,24 @@ class Linkage:
         sqrt of their sum), or an aqs.JOINT_BOUND_* constant. After finalize."""
         f = "aqs_linkage_set_joint_bound"
         self._call(f, _named(kind, JOINT_BOUNDS, f, "kind"))
+
+    def set_exact_solver(self, solver):
+        """Which algorithm computes an exact solve (eps = 0, no cap)
+        (aqs_linkage_set_exact_solver): "aba" (the default; the
+        articulated-body algorithm over the joints, O(N), leaving the assembly
+        tree stale until an adaptive solve needs it, so exact steps report
+        nodes_updated = 0) or "dca" (the full DCA back-substitution over the
+        assembly tree, recomputed after every step), or an aqs.EXACT_*
+        constant. Same results up to rounding. Any phase."""
+        f = "aqs_linkage_set_exact_solver"
+        self._call(f, _named(solver, EXACT_SOLVERS, f, "solver"))
+
+    @property
+    def exact_solver(self):
+        """The exact solver in use: "aba" or "dca" (aqs_linkage_get_exact_solver)."""
+        value = ctypes.c_int32()
+        self._call("aqs_linkage_get_exact_solver", ctypes.byref(value))
+        return EXACT_SOLVER_NAMES[value.value]
 
     def refine(self, eps):
         """Refine the last solve down to a smaller eps, same measure, by

@@ -86,6 +86,16 @@ JOINT_BOUNDS = {
     "sum": JOINT_BOUND_SUM,
 }
 
+# Which algorithm computes an exact solve (AQS_EXACT_*).
+EXACT_ABA = 0  # articulated-body algorithm over the joints, O(N) (default)
+EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tree
+
+EXACT_SOLVERS = {
+    "aba": EXACT_ABA,
+    "dca": EXACT_DCA,
+}
+EXACT_SOLVER_NAMES = {value: name for name, value in EXACT_SOLVERS.items()}
+
 # How finalize builds the assembly tree (AQS_TREE_*).
 TREE_CONTRACTION = 0  # rake and compress rounds (default)
 TREE_BISECTION = 1    # recursive bisection at the most balancing joint
@@ -256,6 +266,8 @@ PROTOTYPES = {
     "aqs_linkage_set_tolerance": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_double]),
     "aqs_linkage_set_max_computed": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_set_exact_solver": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_refine": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_stats": (status_t, [linkage_p, solve_stats_p]),
     "aqs_joint_get_computed": (status_t, [linkage_p, ctypes.c_int32, int32_p]),

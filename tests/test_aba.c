@@ -1,0 +1,272 @@
+/* test_aba.c -- the exact solve by the articulated-body algorithm (src/aba.c)
+ * against the DCA back-substitution over the assembly tree (an independent
+ * algorithm; both are compared with the dense Eigen solver in
+ * tests/reference), a closed form, the tree left stale and recomputed, and
+ * the errors of aqs_linkage_set/get_exact_solver. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "linkage.h"
+
+/* A random tree of n bodies with every joint type (fixed ones welded),
+ * a floating or fixed base, gravity, body forces and joint forces. The same
+ * seed gives the same linkage. */
+static aqs_linkage *random_tree(uint64_t seed, int32_t n, int floating, int32_t solver)
+{
+    static const int32_t kinds[] = {AQS_JOINT_REVOLUTE,  AQS_JOINT_PRISMATIC,   AQS_JOINT_SPHERICAL,
+                                    AQS_JOINT_UNIVERSAL, AQS_JOINT_CYLINDRICAL, AQS_JOINT_PLANAR,
+                                    AQS_JOINT_FIXED,     AQS_JOINT_REVOLUTE};
+    uint64_t rng = seed;
+    aqs_linkage *L = test_new_linkage();
+    int32_t i, j, nq;
+    double g[3] = {0.3, -9.81, 0.2}, *q;
+    assert_int_equal(aqs_linkage_set_exact_solver(L, solver), AQS_OK);
+    for (i = 0; i < n; i++)
+        test_add_body(L, test_uniform(&rng, 0.2, 3.0), test_uniform(&rng, -0.3, 0.3), test_uniform(&rng, -0.3, 0.3),
+                      test_uniform(&rng, -0.3, 0.3), test_uniform(&rng, 0.05, 0.3));
+    for (i = 0; i < n; i++) {
+        double pos[3], quat[4], axis[3];
+        int32_t type, parent;
+        for (j = 0; j < 3; j++) {
+            pos[j] = test_uniform(&rng, -0.8, 0.8);
+            axis[j] = test_uniform(&rng, -1, 1);
+        }
+        test_random_quat(&rng, quat);
+        if (i == 0) {
+            parent = AQS_WORLD;
+            type = floating ? AQS_JOINT_FREE : AQS_JOINT_REVOLUTE;
+        } else {
+            parent = (int32_t)test_uniform(&rng, i / 2.0, i); /* a bushy tree, deep too */
+            type = kinds[(int)test_uniform(&rng, 0, sizeof kinds / sizeof kinds[0])];
+        }
+        assert_int_equal(aqs_joint_add(L, type, parent, i, pos, quat, axis, NULL), AQS_OK);
+    }
+    if (aqs_linkage_finalize(L) != AQS_OK) fail_msg("finalize: %s", aqs_linkage_last_error(L));
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, NULL), AQS_OK);
+    q = malloc(sizeof(double) * (size_t)(nq + 1));
+    assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
+    for (j = 0; j < n; j++) {
+        int32_t off, m, k;
+        assert_int_equal(aqs_joint_get_layout(L, j, &off, &m, NULL, NULL), AQS_OK);
+        if (m == 4 || m == 7) {
+            test_random_quat(&rng, q + off + (m == 7 ? 3 : 0));
+            for (k = 0; k < (m == 7 ? 3 : 0); k++) q[off + k] = test_uniform(&rng, -1, 1);
+        } else {
+            for (k = 0; k < m; k++) q[off + k] = test_uniform(&rng, -1.2, 1.2);
+        }
+    }
+    assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
+    free(q);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    for (i = 0; i < 1 + n / 4; i++) {
+        double f[3], p[3], t[3];
+        for (j = 0; j < 3; j++) {
+            f[j] = test_uniform(&rng, -4, 4);
+            p[j] = test_uniform(&rng, -0.5, 0.5);
+            t[j] = test_uniform(&rng, -1, 1);
+        }
+        assert_int_equal(aqs_body_set_force(L, (int32_t)test_uniform(&rng, 0, n), f, p, t), AQS_OK);
+    }
+    for (i = 0; i < 1 + n / 5; i++) {
+        int32_t jj = (int32_t)test_uniform(&rng, 0, n), nv;
+        double tau[6];
+        assert_int_equal(aqs_joint_get_layout(L, jj, NULL, NULL, NULL, &nv), AQS_OK);
+        for (j = 0; j < 6; j++) tau[j] = test_uniform(&rng, -1, 1);
+        assert_int_equal(aqs_joint_set_force(L, jj, nv ? tau : NULL, nv), AQS_OK);
+    }
+    return L;
+}
+
+typedef struct {
+    double *qdd, *f, *q;
+    int32_t nv, nj, nq;
+} outputs;
+
+static void read_outputs(aqs_linkage *L, outputs *o)
+{
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, &o->nj, &o->nq, &o->nv), AQS_OK);
+    o->qdd = malloc(sizeof(double) * (size_t)(o->nv + 1));
+    o->f = malloc(sizeof(double) * 6 * (size_t)(o->nj + 1));
+    o->q = malloc(sizeof(double) * (size_t)(o->nq + 1));
+    assert_int_equal(aqs_linkage_get_accelerations(L, o->qdd, (size_t)o->nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, o->f, 6 * (size_t)o->nj), AQS_OK);
+    assert_int_equal(aqs_linkage_get_positions(L, o->q, (size_t)o->nq), AQS_OK);
+}
+
+static void free_outputs(outputs *o)
+{
+    free(o->qdd);
+    free(o->f);
+    free(o->q);
+}
+
+/* On 200 random trees (2 to 120 bodies, every joint type, fixed joints,
+ * floating and fixed bases, gravity, body and joint forces) the two exact
+ * solvers agree to 1e-10 relative (2-norm over the whole array: two rounding
+ * histories of a well-conditioned problem, masses within a factor 15), and
+ * so do the positions after 10 exact steps. */
+static void test_aba_equals_dca(void **state)
+{
+    int c;
+    double worst[3] = {0, 0, 0};
+    (void)state;
+    for (c = 0; c < 200; c++) {
+        int32_t n = 2 + (c * 37) % 119, k;
+        aqs_linkage *A = random_tree(1000 + (uint64_t)c, n, c % 3 == 0, AQS_EXACT_ABA);
+        aqs_linkage *D = random_tree(1000 + (uint64_t)c, n, c % 3 == 0, AQS_EXACT_DCA);
+        outputs a, d;
+        double e[3];
+        assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+        for (k = 0; k < 10; k++) {
+            assert_int_equal(aqs_linkage_step(A, 0.02), AQS_OK);
+            assert_int_equal(aqs_linkage_step(D, 0.02), AQS_OK);
+        }
+        assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+        read_outputs(A, &a);
+        read_outputs(D, &d);
+        e[0] = test_rel_diff(a.qdd, d.qdd, (size_t)a.nv);
+        e[1] = test_rel_diff(a.f, d.f, 6 * (size_t)a.nj);
+        e[2] = test_rel_diff(a.q, d.q, (size_t)a.nq);
+        for (k = 0; k < 3; k++) {
+            if (e[k] > worst[k]) worst[k] = e[k];
+            if (!(e[k] <= 1e-10)) fail_msg("case %d (%d bodies): difference %d is %g", c, (int)n, k, e[k]);
+        }
+        free_outputs(&a);
+        free_outputs(&d);
+        aqs_linkage_destroy(A);
+        aqs_linkage_destroy(D);
+    }
+    print_message("ABA vs DCA, 200 trees: qdd %.3g, constraint forces %.3g, positions after 10 steps %.3g\n",
+                  worst[0], worst[1], worst[2]);
+}
+
+/* A pendulum (rod of mass m, centre of mass l out, inertia I_zz about it)
+ * under gravity: qdd = -g m l / (I_zz + m l^2), and the pin force holds the
+ * rest: f = m (a_com - g) in the body frame, a_com = qdd x (l, 0, 0). */
+static void test_pendulum_closed_form(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    const double m = 2.0, l = 0.5, izz = 0.1, g[3] = {0, -9.81, 0};
+    double qdd, f[6], expect, fy;
+    int32_t nodes;
+    aqs_solve_stats st;
+    (void)state;
+    test_add_body(L, m, l, 0, 0, izz);
+    test_add_joint(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, 0, 0, 0, 0, 0, 1);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, &qdd, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6), AQS_OK);
+    expect = -9.81 * m * l / (izz + m * l * l);
+    assert_true(fabs(qdd - expect) <= 1e-14 * fabs(expect));
+    fy = m * (qdd * l + 9.81); /* linear y: m (a_com,y - g_y) */
+    assert_true(fabs(f[3]) <= 1e-13 && fabs(f[4] - fy) <= 1e-13 * fabs(fy) && fabs(f[5]) <= 1e-13);
+    /* the exact step leaves the tree alone */
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.nodes_updated, 0);
+    assert_int_equal(st.nodes_processed, 0);
+    assert_int_equal(aqs_linkage_get_tree_stats(L, &nodes, NULL, NULL, NULL), AQS_OK);
+    assert_true(L->t.all_dirty);
+    aqs_linkage_destroy(L);
+}
+
+/* Exact steps by the articulated-body algorithm, then an adaptive solve: the
+ * stale tree is recomputed first and the result equals that of a linkage
+ * that took the same steps with the DCA (which kept its tree current). */
+static void test_stale_tree_recomputed(void **state)
+{
+    aqs_linkage *A = random_tree(77, 90, 0, AQS_EXACT_ABA), *D = random_tree(77, 90, 0, AQS_EXACT_DCA);
+    aqs_solve_stats sa, sd;
+    outputs a, d;
+    int k;
+    (void)state;
+    for (k = 0; k < 8; k++) {
+        assert_int_equal(aqs_linkage_step(A, 0.02), AQS_OK);
+        assert_int_equal(aqs_linkage_step(D, 0.02), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, ldexp(1.0, -8)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(D, AQS_METRIC_REL_JOINT, ldexp(1.0, -8)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+    sa.size = sd.size = sizeof sa;
+    assert_int_equal(aqs_linkage_get_stats(A, &sa), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(D, &sd), AQS_OK);
+    assert_int_equal(sa.nodes_updated, A->t.nnodes); /* the whole stale tree, once */
+    assert_int_equal(sa.computed_joints, sd.computed_joints);
+    assert_true(sa.computed_joints < sa.counted_joints);
+    assert_true(fabs(sa.error_bound - sd.error_bound) <= 1e-9 * sd.error_bound);
+    read_outputs(A, &a);
+    read_outputs(D, &d);
+    assert_true(test_rel_diff(a.qdd, d.qdd, (size_t)a.nv) <= 1e-10);
+    free_outputs(&a);
+    free_outputs(&d);
+    /* back to exact: the articulated-body algorithm again, same answer */
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(D, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+    read_outputs(A, &a);
+    read_outputs(D, &d);
+    assert_true(test_rel_diff(a.qdd, d.qdd, (size_t)a.nv) <= 1e-10);
+    free_outputs(&a);
+    free_outputs(&d);
+    aqs_linkage_destroy(A);
+    aqs_linkage_destroy(D);
+}
+
+static void test_exact_solver_errors(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    int32_t solver = -1;
+    double qdd0, qdd1;
+    (void)state;
+    assert_int_equal(aqs_linkage_set_exact_solver(NULL, AQS_EXACT_DCA), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_exact_solver(NULL, &solver), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_exact_solver(L, NULL), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "solver is NULL");
+    assert_int_equal(aqs_linkage_get_exact_solver(L, &solver), AQS_OK);
+    assert_int_equal(solver, AQS_EXACT_ABA); /* the default */
+    test_add_body(L, 1.0, 0.5, 0, 0, 0.1);
+    test_add_joint(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, 0, 0, 0, 0, 0, 1);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    {
+        double g[3] = {0, -9.81, 0};
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, &qdd0, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, 2), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "solver = 2");
+    assert_int_equal(aqs_linkage_set_exact_solver(L, -1), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_exact_solver(L, &solver), AQS_OK);
+    assert_int_equal(solver, AQS_EXACT_ABA); /* unchanged */
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, &qdd1, 1), AQS_OK);
+    assert_true(qdd0 == qdd1);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_get_exact_solver(L, &solver), AQS_OK);
+    assert_int_equal(solver, AQS_EXACT_DCA);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, &qdd1, 1), AQS_OK);
+    assert_true(fabs(qdd1 - qdd0) <= 1e-14 * fabs(qdd0));
+    aqs_linkage_destroy(L);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_aba_equals_dca),
+        cmocka_unit_test(test_pendulum_closed_form),
+        cmocka_unit_test(test_stale_tree_recomputed),
+        cmocka_unit_test(test_exact_solver_errors),
+    };
+    return cmocka_run_group_tests_name("aba", tests, NULL, NULL);
+}
