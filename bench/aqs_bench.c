@@ -11,10 +11,13 @@
  *    displacements of the bodies' centres of mass are the reference;
  *  - for each eps: A takes K steps from the same initial state; after every
  *    chunk of C adaptive steps (--exact-every, at least 3 chunks) E takes one
- *    timed exact step from its own reset, so both medians see the same
- *    machine load. Repeated --repeats times; ms_per_step and
- *    exact_ms_per_step are medians over the repeats of each repeat's median
- *    step time.
+ *    timed exact step by each exact solver (the articulated-body algorithm,
+ *    the default, then the DCA after an untimed solve that brings its tree
+ *    up to date), so all medians see the same machine load. Repeated
+ *    --repeats times; ms_per_step, exact_ms_per_step (articulated-body) and
+ *    exact_dca_ms_per_step are medians over the repeats of each repeat's
+ *    median step time. speedup is against the articulated-body step, R (per
+ *    tree node) against the DCA step.
  * displacement_error = max_i |d_i - d_i^exact| / max_i |d_i^exact| over the
  * bodies' centres of mass after K steps (DESIGN.md); 0 for eps = 0.
  *
@@ -69,7 +72,7 @@ typedef struct bench_state {
     double mean_handles, build_s, finalize_s;
     long exact_bytes, adaptive_bytes;
     double *q0, *com_local, *com0, *com_now, *poses, *disp_ref, *qdd;
-    double *times, *times_exact;
+    double *times, *times_exact, *times_dca;
     int32_t *force_body;
     double (*force_dir)[3];
     FILE *json, *tip;
@@ -82,7 +85,7 @@ typedef struct bench_state {
 /* One configuration's run (one repeat). */
 typedef struct bench_run {
     int32_t steps;
-    double median_s, mean_s, exact_median_s;
+    double median_s, mean_s, exact_median_s, dca_median_s;
     double mean_ne, mean_nu, mean_np, max_bound;
     int32_t max_ne;
     double disp_err, max_disp;
@@ -685,7 +688,18 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
             return 1;
         }
         if ((s + 1) % chunk == 0 || s + 1 == K) {
-            if (timed_step(b, b->exact, dt, &b->times_exact[ne], NULL) != 0) {
+            /* One exact step by each solver: the articulated-body algorithm
+             * (the default, what an exact user pays) and the DCA (whose time
+             * per tree node is R's reference). The untimed solve brings the
+             * tree, left stale by the articulated-body steps, up to date, so
+             * that the DCA step costs what it costs in a DCA-only run. */
+            if (failed(aqs_linkage_set_exact_solver(b->exact, AQS_EXACT_DCA), b->exact,
+                       "aqs_linkage_set_exact_solver") ||
+                failed(aqs_linkage_solve(b->exact), b->exact, "aqs_linkage_solve") ||
+                timed_step(b, b->exact, dt, &b->times_dca[ne], NULL) != 0 ||
+                failed(aqs_linkage_set_exact_solver(b->exact, AQS_EXACT_ABA), b->exact,
+                       "aqs_linkage_set_exact_solver") ||
+                timed_step(b, b->exact, dt, &b->times_exact[ne], NULL) != 0) {
                 return 1;
             }
             ++ne;
@@ -694,6 +708,7 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
     finish_sums(r, K);
     r->median_s = bench_median(b->times, (size_t)K);
     r->exact_median_s = bench_median(b->times_exact, (size_t)ne);
+    r->dca_median_s = bench_median(b->times_dca, (size_t)ne);
     return displacement(b, b->adapt, 0, r);
 }
 
@@ -711,10 +726,10 @@ static double loadavg1(void)
 }
 
 static void write_json(bench_state *b, int32_t nf, int ei, double dt, const bench_run *r,
-                       double ms, double exact_ms, double ref_ms)
+                       double ms, double exact_ms, double dca_ms, double ref_ms)
 {
     const bench_options *o = b->opt;
-    const double t_node = exact_ms / b->tree_nodes;
+    const double t_node = dca_ms / b->tree_nodes;
     const double denom = (r->mean_ne + nf * (log((double)b->joints) / log(2.0))) * t_node;
     const long kb = bench_peak_rss_kb();
     if (b->json == NULL) {
@@ -739,24 +754,26 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
     fprintf(b->json,
             "\"dt\":%.9g,\"first_move\":%.9g,\"steps\":%d,\"repeats\":%d,"
             "\"ms_per_step\":%.9g,\"mean_ms_per_step\":%.9g,\"exact_ms_per_step\":%.9g,"
+            "\"exact_us_per_joint\":%.9g,\"exact_dca_ms_per_step\":%.9g,"
             "\"exact_ref_ms_per_step\":%.9g,\"exact_us_per_node\":%.9g,\"speedup\":%.9g,"
+            "\"speedup_dca\":%.9g,"
             "\"computed_joints\":%.4f,\"max_computed_joints\":%d,\"nodes_updated\":%.4f,"
             "\"nodes_processed\":%.4f,\"max_error_bound\":%.9g,\"ratio_R\":%.9g,"
             "\"displacement_error\":%.9g,\"max_displacement\":%.9g,"
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
-            ref_ms, 1e3 * t_node, exact_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
+            1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1());
     fflush(b->json);
 }
 
 static void print_row(bench_state *b, int32_t nf, int ei, const bench_run *r, double ms,
-                      double exact_ms)
+                      double exact_ms, double dca_ms)
 {
     const bench_options *o = b->opt;
-    const double t_node = exact_ms / b->tree_nodes;
+    const double t_node = dca_ms / b->tree_nodes;
     const double denom = (r->mean_ne + nf * (log((double)b->joints) / log(2.0))) * t_node;
     char eps[24];
     if (o->quiet) {
@@ -770,9 +787,9 @@ static void print_row(bench_state *b, int32_t nf, int ei, const bench_run *r, do
     if (b->progress) {
         fputs("\r\033[K", stderr);
     }
-    printf("%6d %7s %6d %10.4f %10.3f %9.1f %10.1f %10.1f %6.2f %10.2e %10.2e\n", (int)nf, eps,
-           (int)r->steps, ms, exact_ms, exact_ms / ms, r->mean_ne, r->mean_nu, ms / denom,
-           r->disp_err, r->max_bound);
+    printf("%6d %7s %6d %10.4f %10.3f %9.1f %10.3f %9.1f %10.1f %10.1f %6.2f %10.2e %10.2e\n", (int)nf,
+           eps, (int)r->steps, ms, exact_ms, exact_ms / ms, dca_ms, dca_ms / ms, r->mean_ne, r->mean_nu,
+           ms / denom, r->disp_err, r->max_bound);
     fflush(stdout);
 }
 
@@ -816,8 +833,10 @@ static int setup(bench_state *b)
     b->disp_ref = (double *)calloc(3 * (size_t)b->bodies, sizeof(double));
     b->times = (double *)malloc(sizeof(double) * (size_t)o->steps);
     b->times_exact = (double *)malloc(sizeof(double) * (size_t)o->steps);
+    b->times_dca = (double *)malloc(sizeof(double) * (size_t)o->steps);
     if (b->q0 == NULL || b->qdd == NULL || b->poses == NULL || b->com_local == NULL ||
-        b->com0 == NULL || b->com_now == NULL || b->disp_ref == NULL || b->times == NULL || b->times_exact == NULL) {
+        b->com0 == NULL || b->com_now == NULL || b->disp_ref == NULL || b->times == NULL || b->times_exact == NULL ||
+        b->times_dca == NULL) {
         fprintf(stderr, "aqs-bench: out of memory\n");
         return 1;
     }
@@ -881,14 +900,15 @@ static int run_forces(bench_state *b, int32_t nf)
 {
     const bench_options *o = b->opt;
     const int32_t R = o->repeats;
-    double dt, *ms = NULL, *ex = NULL, *ref = NULL;
+    double dt, *ms = NULL, *ex = NULL, *dc = NULL, *ref = NULL;
     bench_run first, r, ref_run;
     int32_t rep;
     int ei, rc = 1;
     ms = (double *)malloc(sizeof(double) * (size_t)R);
     ex = (double *)malloc(sizeof(double) * (size_t)R);
+    dc = (double *)malloc(sizeof(double) * (size_t)R);
     ref = (double *)malloc(sizeof(double) * (size_t)R);
-    if (ms == NULL || ex == NULL || ref == NULL || choose_dt(b, nf, &dt) != 0) {
+    if (ms == NULL || ex == NULL || dc == NULL || ref == NULL || choose_dt(b, nf, &dt) != 0) {
         goto out;
     }
     for (rep = 0; rep < R; ++rep) {
@@ -898,25 +918,28 @@ static int run_forces(bench_state *b, int32_t nf)
         ref[rep] = 1e3 * ref_run.median_s;
     }
     for (ei = 0; ei < o->neps; ++ei) {
-        double ms_med, ex_med, ref_med;
+        double ms_med, ex_med, dc_med, ref_med;
         for (rep = 0; rep < R; ++rep) {
             if (adaptive_run(b, nf, o->eps[ei], dt, rep == 0, rep == 0 ? &first : &r) != 0) {
                 goto out;
             }
             ms[rep] = 1e3 * (rep == 0 ? first.median_s : r.median_s);
             ex[rep] = 1e3 * (rep == 0 ? first.exact_median_s : r.exact_median_s);
+            dc[rep] = 1e3 * (rep == 0 ? first.dca_median_s : r.dca_median_s);
         }
         ms_med = bench_median(ms, (size_t)R);
         ex_med = bench_median(ex, (size_t)R);
+        dc_med = bench_median(dc, (size_t)R);
         memcpy(ms, ref, sizeof(double) * (size_t)R);
         ref_med = bench_median(ms, (size_t)R);
-        write_json(b, nf, ei, dt, &first, ms_med, ex_med, ref_med);
-        print_row(b, nf, ei, &first, ms_med, ex_med);
+        write_json(b, nf, ei, dt, &first, ms_med, ex_med, dc_med, ref_med);
+        print_row(b, nf, ei, &first, ms_med, ex_med, dc_med);
     }
     rc = 0;
 out:
     free(ms);
     free(ex);
+    free(dc);
     free(ref);
     return rc;
 }
@@ -981,19 +1004,20 @@ int main(int argc, char **argv)
     {
         const long K = opt.steps;
         const long chunks = (K + 2) / 3 > K / opt.exact_every ? (K + 2) / 3 : K / opt.exact_every;
-        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * (K + chunks + 1));
+        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * (K + 2 * chunks + 1));
     }
     if (!opt.quiet) {
         printf("metric %s; %d steps per run, %d repeat(s); force seed %llu; dt: the fastest "
                "joint moves %.3g in the first exact step\n"
-               "ms/step and exact ms: medians (exact steps interleaved with the adaptive run); "
-               "R = t / ((N_E + N_f log2 N) t_node), t_node = exact ms / tree nodes; disp err = "
+               "ms/step, exact ms (articulated-body algorithm, the default exact solver) and DCA ms "
+               "(exact by the DCA): medians (exact steps interleaved with the adaptive run); "
+               "R = t / ((N_E + N_f log2 N) t_node), t_node = DCA ms / tree nodes; disp err = "
                "max_i |d_i - d_i^exact| / max_i |d_i^exact| (centres of mass)\n",
                metric_names[opt.metric], (int)opt.steps, (int)opt.repeats,
                (unsigned long long)opt.seed, opt.first_move);
-        printf("%6s %7s %6s %10s %10s %9s %10s %10s %6s %10s %10s\n", "N_f", "eps", "steps",
-               "ms/step", "exact ms", "speedup", "N_E", "updated", "R", "disp err",
-               "max bound");
+        printf("%6s %7s %6s %10s %10s %9s %10s %9s %10s %10s %6s %10s %10s\n", "N_f", "eps", "steps",
+               "ms/step", "exact ms", "speedup", "DCA ms", "vs DCA", "N_E", "updated", "R",
+               "disp err", "max bound");
     }
     for (i = 0; i < opt.nforces; ++i) {
         if (run_forces(&b, opt.forces[i]) != 0) {
@@ -1025,6 +1049,7 @@ done:
     free(b.disp_ref);
     free(b.times);
     free(b.times_exact);
+    free(b.times_dca);
     free(b.force_body);
     free(b.force_dir);
     return rc;

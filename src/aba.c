@@ -110,15 +110,22 @@ static aqs_status backward(aqs_linkage *L)
         IA = a->IA + 36 * c;
         pA = a->pA + 6 * c;
         joint_subspace(jd, L->q + jd->qoff, S);
-        for (j = 0; j < d; j++) {
+        if (d == 1) {
             double s = 0.0;
-            for (r = 0; r < 6; r++) {
-                double v = 0.0;
-                for (i = 0; i < 6; i++) v += IA[6 * r + i] * S[i * d + j];
-                U[6 * j + r] = v;
-                s += S[r * d + j] * pA[r];
+            dense_matvec6(IA, S, U); /* U = IA S, S a single column */
+            for (r = 0; r < 6; r++) s += S[r] * pA[r];
+            u[0] = Q[0] - s;
+        } else {
+            for (j = 0; j < d; j++) {
+                double s = 0.0;
+                for (r = 0; r < 6; r++) {
+                    double v = 0.0;
+                    for (i = 0; i < 6; i++) v += IA[6 * r + i] * S[i * d + j];
+                    U[6 * j + r] = v;
+                    s += S[r * d + j] * pA[r];
+                }
+                u[j] = Q[j] - s;
             }
-            u[j] = Q[j] - s;
         }
         if (joint_space_inverse(S, U, d, Dinv) != 0)
             return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
@@ -136,8 +143,10 @@ static aqs_status backward(aqs_linkage *L)
             pa[r] = v;
         }
         if (d == 1) {
-            for (r = 0; r < 6; r++)
-                for (i = r; i < 6; i++) Ia[6 * r + i] = Ia[6 * i + r] = IA[6 * r + i] - U[r] * U[i] * Dinv[0];
+            for (r = 0; r < 6; r++) {
+                double ur = U[r] * Dinv[0];
+                for (i = r; i < 6; i++) Ia[6 * r + i] = Ia[6 * i + r] = IA[6 * r + i] - ur * U[i];
+            }
         } else {
             double DU[36]; /* D^-1 U, d x 6 */
             for (j = 0; j < d; j++)
@@ -184,21 +193,31 @@ static void forward(aqs_linkage *L)
         child_in_parent(L, e, &P);
         spatial_xform_motion(&P, acc + 6 * p, ac); /* a' = X a_p */
         joint_subspace(jd, L->q + jd->qoff, S);
-        (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
-        for (j = 0; j < d; j++) {
-            double v = u[j];
-            for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
-            rhs[j] = v;
-        }
-        for (j = 0; j < d; j++) {
-            double v = 0.0;
-            for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
-            qdd[j] = v;
-        }
-        for (i = 0; i < 6; i++) {
-            double v = 0.0;
-            for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
-            ac[i] += v;
+        if (d == 1) {
+            double D = 0.0, v = u[0];
+            for (i = 0; i < 6; i++) {
+                D += S[i] * U[i];
+                v -= U[i] * ac[i];
+            }
+            qdd[0] = v / D; /* D > 0: checked in the backward pass */
+            for (i = 0; i < 6; i++) ac[i] += S[i] * qdd[0];
+        } else {
+            (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
+            for (j = 0; j < d; j++) {
+                double v = u[j];
+                for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
+                rhs[j] = v;
+            }
+            for (j = 0; j < d; j++) {
+                double v = 0.0;
+                for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
+                qdd[j] = v;
+            }
+            for (i = 0; i < 6; i++) {
+                double v = 0.0;
+                for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
+                ac[i] += v;
+            }
         }
         dense_matvec6(IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += pA[i];

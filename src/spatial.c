@@ -255,16 +255,16 @@ void spatial_inertia(double m, const double c[3], const double Ic[9], double I[3
 static void rot_block_to_parent(const double *R, const double *S, double *out, int sym)
 {
     double T[9];
-    int i, j, k;
+    int i, j;
     for (i = 0; i < 3; i++) /* T = S R^T */
         for (j = 0; j < 3; j++) T[3 * i + j] = S[6 * i] * R[3 * j] + S[6 * i + 1] * R[3 * j + 1] + S[6 * i + 2] * R[3 * j + 2];
-    for (i = 0; i < 3; i++)
-        for (j = sym ? i : 0; j < 3; j++) {
-            double v = 0.0;
-            for (k = 0; k < 3; k++) v += R[3 * i + k] * T[3 * k + j];
-            out[3 * i + j] = v;
-            if (sym) out[3 * j + i] = v;
-        }
+    for (i = 0; i < 3; i++) /* out = R T, fixed bounds so that it unrolls */
+        for (j = 0; j < 3; j++) out[3 * i + j] = R[3 * i] * T[j] + R[3 * i + 1] * T[3 + j] + R[3 * i + 2] * T[6 + j];
+    if (sym) {
+        out[3] = out[1];
+        out[6] = out[2];
+        out[7] = out[5];
+    }
 }
 
 void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36])

@@ -19,6 +19,7 @@ REQUIRED = {
     "tree_nodes": int, "tree_height": int, "handles_mean": float, "handles_max": int,
     "forces": int, "force_seed": int, "metric": str, "eps": (int, float),
     "steps": int, "repeats": int, "ms_per_step": float, "exact_ms_per_step": float,
+    "exact_us_per_joint": float, "exact_dca_ms_per_step": float, "speedup_dca": float,
     "exact_ref_ms_per_step": float, "speedup": float, "computed_joints": float,
     "nodes_updated": float, "nodes_processed": float, "displacement_error": (int, float),
     "max_error_bound": (int, float), "ratio_R": float, "peak_rss_bytes": int,
@@ -64,12 +65,18 @@ def test_schema(lines):
 def test_consistency(lines):
     for d in lines:
         assert d["ms_per_step"] > 0 and d["exact_ms_per_step"] > 0
+        assert d["exact_dca_ms_per_step"] > 0
         assert d["speedup"] == pytest.approx(d["exact_ms_per_step"] / d["ms_per_step"],
                                              rel=1e-6)
+        assert d["speedup_dca"] == pytest.approx(d["exact_dca_ms_per_step"] / d["ms_per_step"],
+                                                 rel=1e-6)
+        assert d["exact_us_per_joint"] == pytest.approx(
+            1e3 * d["exact_ms_per_step"] / d["joints"], rel=1e-6)
+        # R's time per tree node is the exact DCA step's
         assert d["exact_us_per_node"] == pytest.approx(
-            1e3 * d["exact_ms_per_step"] / d["tree_nodes"], rel=1e-6)
+            1e3 * d["exact_dca_ms_per_step"] / d["tree_nodes"], rel=1e-6)
         log2n = math.log2(d["joints"])
-        t_node = d["exact_ms_per_step"] / d["tree_nodes"]
+        t_node = d["exact_dca_ms_per_step"] / d["tree_nodes"]
         assert d["ratio_R"] == pytest.approx(
             d["ms_per_step"] / ((d["computed_joints"] + d["forces"] * log2n) * t_node), rel=1e-6)
         assert 0 < d["computed_joints"] <= d["max_computed_joints"] <= d["joints"]
@@ -92,6 +99,48 @@ def test_adaptive_configuration(lines):
         # computed than in the exact run
         assert d["max_error_bound"] <= d["eps"]
         assert d["computed_joints"] < d["joints"]
+
+
+def test_displacement_error_recomputed(tmp_path):
+    """displacement_error recomputed independently through the Python bindings:
+    chain30 exported as URDF, the same tip force, dt and steps, exact and
+    adaptive from the straight start; max_i |d_i - d_i^exact| / max_i |d_i^exact|
+    over the links' centres of mass. Both runs are deterministic, so the two
+    computations agree to the 9 significant digits the JSON carries (1e-8)."""
+    aqs = pytest.importorskip("aqs")
+    np = pytest.importorskip("numpy")
+    out, urdf = tmp_path / "c.jsonl", tmp_path / "chain30.urdf"
+    run("--scene", "chain30", "--steps", "40", "--eps", "2^-4", "--quiet", "--out", str(out))
+    run("--scene", "chain30", "--export-urdf", str(urdf))
+    with open(out) as f:
+        d = json.loads(f.readline())
+    assert d["eps"] == 2.0 ** -4 and d["computed_joints"] < 30
+
+    def com_positions(eps):
+        with aqs.load_urdf(str(urdf)) as L:
+            L.set_body_force(29, (0, 1, 0), point=(1, 0, 0))
+            L.set_tolerance("rel_joint", eps)
+            start = None
+            for k in range(41):
+                poses = [L.body_pose(b) for b in range(30)]
+                coms = np.array([p + aqs_rotate(q, (0.5, 0, 0)) for p, q in poses])
+                if k == 0:
+                    start = coms
+                if k < 40:
+                    L.step(d["dt"])
+            return coms - start
+
+    def aqs_rotate(q, v):
+        w, x, y, z = q
+        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+        return R @ np.asarray(v, dtype=float)
+
+    exact, approx = com_positions(0.0), com_positions(2.0 ** -4)
+    err = np.max(np.linalg.norm(approx - exact, axis=1)) / np.max(np.linalg.norm(exact, axis=1))
+    assert err > 0
+    assert d["displacement_error"] == pytest.approx(err, rel=1e-8)
 
 
 def test_tip_path(tmp_path):
