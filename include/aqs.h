@@ -187,7 +187,8 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *linkage);
 
 /** Sizes. Any phase. Each out pointer may be NULL.
  *  bodies, joints: counts as added; nq: position values; nv: acceleration
- *  values (sums over all joints of the per-type sizes above). */
+ *  values (sums over all joints of the per-type sizes above).
+ *  Returns AQS_OK, AQS_EINVAL (NULL linkage). */
 AQS_API aqs_status aqs_linkage_get_sizes(const aqs_linkage *linkage, int32_t *bodies,
                                          int32_t *joints, int32_t *nq, int32_t *nv);
 
@@ -233,7 +234,9 @@ AQS_API aqs_status aqs_joint_get_definition(const aqs_linkage *linkage, int32_t 
  * Loads (any phase; persistent until changed or cleared)
  * ---------------------------------------------------------------------- */
 
-/** Gravitational acceleration, world frame, m/s^2 (default 0,0,0). */
+/** Gravitational acceleration, world frame, m/s^2 (default 0,0,0).
+ *  gravity: (3), finite. Returns AQS_OK, AQS_EINVAL (NULL linkage or
+ *  gravity, a non-finite value). */
 AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *linkage, const double gravity[3]);
 
 /** Set the external load on a body, replacing any earlier one.
@@ -246,7 +249,8 @@ AQS_API aqs_status aqs_body_set_force(aqs_linkage *linkage, int32_t body, const 
 /** Remove the external load of one body. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
 AQS_API aqs_status aqs_body_clear_force(aqs_linkage *linkage, int32_t body);
 
-/** Remove every body load and every joint force. */
+/** Remove every body load and every joint force (gravity and the contact
+ *  stiffness are kept). Returns AQS_OK, AQS_EINVAL (NULL linkage). */
 AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *linkage);
 
 /** Active joint force Q, one value per dof (N for translations, N m for
@@ -383,10 +387,16 @@ AQS_API aqs_status aqs_linkage_get_positions(const aqs_linkage *linkage, double 
  *  1e-6 (normalized on input). Any phase. Returns AQS_OK, AQS_EINVAL, AQS_ESIZE. */
 AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *linkage, const double *q, size_t n);
 
-/** Position of one joint. q: (n == the joint's nq). */
+/** Position of one joint. q: (n == the joint's nq; may be NULL when nq is 0).
+ *  Any phase. Returns AQS_OK, AQS_EINVAL (NULL linkage or q), AQS_ERANGE,
+ *  AQS_ESIZE (n != nq; nothing written). */
 AQS_API aqs_status aqs_joint_get_position(const aqs_linkage *linkage, int32_t joint, double *q,
                                           int32_t n);
-/** Set the position of one joint. q: (n == the joint's nq), as above. */
+/** Set the position of one joint. q: (n == the joint's nq; may be NULL when
+ *  nq is 0), as above: finite, quaternions unit within 1e-6 (normalized on
+ *  input). Any phase. Returns AQS_OK, AQS_EINVAL (NULL linkage or q, a
+ *  non-finite value, a quaternion not unit), AQS_ERANGE, AQS_ESIZE
+ *  (n != nq). */
 AQS_API aqs_status aqs_joint_set_position(aqs_linkage *linkage, int32_t joint, const double *q,
                                           int32_t n);
 
@@ -398,7 +408,10 @@ AQS_API aqs_status aqs_joint_set_position(aqs_linkage *linkage, int32_t joint, c
 AQS_API aqs_status aqs_linkage_get_accelerations(const aqs_linkage *linkage, double *qdd,
                                                  size_t n);
 
-/** Acceleration of one joint of the last solve. qdd: (n == the joint's nv). */
+/** Acceleration of one joint of the last solve. qdd: (n == the joint's nv;
+ *  may be NULL when nv is 0), as above. Returns AQS_OK, AQS_EINVAL (NULL
+ *  linkage or qdd), AQS_ERANGE, AQS_ESTATE (not finalized, nothing solved
+ *  yet, or the last solve failed), AQS_ESIZE (n != nv; nothing written). */
 AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *linkage, int32_t joint,
                                               double *qdd, int32_t n);
 
@@ -410,7 +423,9 @@ AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *linkage, int32_
 AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *linkage, double *f,
                                                      size_t n);
 
-/** Constraint force of one joint: f (6), as above. */
+/** Constraint force of one joint: f (6), as above. Returns AQS_OK,
+ *  AQS_EINVAL (NULL linkage or f), AQS_ERANGE, AQS_ESTATE (not finalized,
+ *  nothing solved yet, or the last solve failed). */
 AQS_API aqs_status aqs_joint_get_constraint_force(const aqs_linkage *linkage, int32_t joint,
                                                   double f[6]);
 
@@ -465,7 +480,8 @@ AQS_API aqs_status aqs_shape_add_hull(aqs_linkage *linkage, int32_t body, const 
                                       int32_t npoints, const double pos[3], const double quat[4],
                                       int32_t *out_shape);
 
-/** Number of shapes (obstacles included). Any phase. */
+/** Number of shapes (obstacles included) into *count (non-NULL). Any phase.
+ *  Returns AQS_OK, AQS_EINVAL (NULL linkage or count). */
 AQS_API aqs_status aqs_linkage_get_shape_count(const aqs_linkage *linkage, int32_t *count);
 
 /** Collision filter of a body (or of all obstacles with AQS_WORLD): two

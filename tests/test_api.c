@@ -179,6 +179,7 @@ static void test_null_linkage(void **state)
 {
     double v[64] = {0}, q4[4] = {1, 0, 0, 0};
     int32_t i32 = 0;
+    int k;
     aqs_solve_stats st;
     const char *msg = aqs_linkage_last_error(NULL);
     (void)state;
@@ -189,6 +190,8 @@ static void test_null_linkage(void **state)
     aqs_linkage_destroy(NULL); /* accepted */
     assert_int_equal(aqs_linkage_create(NULL), AQS_EINVAL);
     assert_int_equal(aqs_linkage_set_inertia_check(NULL, 1), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tree_builder(NULL, AQS_TREE_BISECTION), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tree_builder(NULL, 99), AQS_EINVAL);
     assert_int_equal(aqs_body_add(NULL, 1, v, v, NULL), AQS_EINVAL);
     assert_int_equal(aqs_joint_add(NULL, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, v, q4, zaxis, NULL), AQS_EINVAL);
     assert_int_equal(aqs_linkage_finalize(NULL), AQS_EINVAL);
@@ -217,6 +220,13 @@ static void test_null_linkage(void **state)
     assert_int_equal(aqs_joint_get_constraint_force(NULL, 0, v), AQS_EINVAL);
     assert_int_equal(aqs_body_get_pose_world(NULL, 0, v, v + 3), AQS_EINVAL);
     assert_int_equal(aqs_linkage_get_body_poses_world(NULL, v, 64), AQS_EINVAL);
+    /* nothing was written through the out pointers */
+    assert_int_equal(i32, 0);
+    for (k = 0; k < 64; k++) assert_true(v[k] == 0.0);
+    /* without a linkage there is nowhere to keep a message: the fixed text
+     * names the argument */
+    assert_string_equal(aqs_linkage_last_error(NULL), msg);
+    test_assert_contains(msg, "linkage is NULL");
 }
 
 static void *plain_alloc(void *user, size_t size)
@@ -439,6 +449,115 @@ static void test_phases(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* ------------------------------------------------------- tree builder */
+
+typedef struct {
+    int32_t nodes, height, max_handles;
+    double mean_handles;
+} tree_shape;
+
+/* A 12-body revolute chain, all joints but the last (joint 11, body 11 to
+ * its parent) unless complete. On this chain the two builders give
+ * different trees (mean handles 1.60 for contraction, 1.64 for bisection),
+ * so the shape of the tree tells which builder was in force. */
+static aqs_linkage *chain12(int complete)
+{
+    aqs_linkage *L = test_new_linkage();
+    int32_t i;
+    for (i = 0; i < 12; i++) test_add_body(L, 1.0, 0.2, 0, 0, 0.1);
+    for (i = 0; i < (complete ? 12 : 11); i++) test_add_joint(L, AQS_JOINT_REVOLUTE, i - 1, i, 0.5, 0, 0, 0, 0, 1);
+    return L;
+}
+
+static void finalize_shape(aqs_linkage *L, tree_shape *t)
+{
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_tree_stats(L, &t->nodes, &t->height, &t->mean_handles, &t->max_handles), AQS_OK);
+}
+
+static void assert_same_shape(const tree_shape *a, const tree_shape *b)
+{
+    assert_int_equal(a->nodes, b->nodes);
+    assert_int_equal(a->height, b->height);
+    assert_int_equal(a->max_handles, b->max_handles);
+    assert_true(a->mean_handles == b->mean_handles);
+}
+
+/* aqs_linkage_set_tree_builder: a value that is not AQS_TREE_* is
+ * AQS_EINVAL naming the function and the value, and the builder in force
+ * (default or set) stays; a NULL linkage is AQS_EINVAL; after finalize
+ * every value is AQS_ESTATE (the phase is checked first) and the linkage is
+ * unchanged; after a failed finalize the linkage is still editable. */
+static void test_tree_builder_errors(void **state)
+{
+    static const char fn[] = "aqs_linkage_set_tree_builder";
+    static const int32_t bad[] = {2, -1, 99, INT32_MAX, INT32_MIN};
+    static const int32_t first[] = {-100, AQS_TREE_CONTRACTION, AQS_TREE_BISECTION}; /* -100: none */
+    tree_shape contraction, bisection, t;
+    snapshot ref;
+    aqs_linkage *L;
+    size_t i, k;
+    (void)state;
+    /* the references: default and bisection differ on this chain */
+    L = chain12(1);
+    finalize_shape(L, &contraction);
+    aqs_linkage_destroy(L);
+    L = chain12(1);
+    assert_int_equal(aqs_linkage_set_tree_builder(L, AQS_TREE_BISECTION), AQS_OK);
+    finalize_shape(L, &bisection);
+    aqs_linkage_destroy(L);
+    assert_true(contraction.mean_handles != bisection.mean_handles);
+    L = chain12(1);
+    assert_int_equal(aqs_linkage_set_tree_builder(L, AQS_TREE_CONTRACTION), AQS_OK);
+    finalize_shape(L, &t);
+    assert_same_shape(&t, &contraction);
+    aqs_linkage_destroy(L);
+    /* bad values, after no setting, contraction or bisection */
+    for (i = 0; i < sizeof first / sizeof first[0]; i++) {
+        L = chain12(1);
+        if (first[i] >= 0) assert_int_equal(aqs_linkage_set_tree_builder(L, first[i]), AQS_OK);
+        for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+            char text[48];
+            assert_int_equal(aqs_linkage_set_tree_builder(L, bad[k]), AQS_EINVAL);
+            snprintf(text, sizeof text, "builder = %d", (int)bad[k]);
+            test_assert_contains(aqs_linkage_last_error(L), fn);
+            test_assert_contains(aqs_linkage_last_error(L), text);
+            test_assert_contains(aqs_linkage_last_error(L), "AQS_TREE_");
+        }
+        finalize_shape(L, &t);
+        assert_same_shape(&t, first[i] == AQS_TREE_BISECTION ? &bisection : &contraction);
+        aqs_linkage_destroy(L);
+    }
+    /* a failed finalize leaves the linkage editable: the builder can still be set */
+    L = chain12(0);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
+    assert_int_equal(aqs_linkage_set_tree_builder(L, AQS_TREE_BISECTION), AQS_OK);
+    test_add_joint(L, AQS_JOINT_REVOLUTE, 10, 11, 0.5, 0, 0, 0, 0, 1);
+    finalize_shape(L, &t);
+    assert_same_shape(&t, &bisection);
+    /* after finalize: a phase error for every value (also a bad one: the
+     * phase is checked first), and the tree is kept */
+    for (k = 0; k < 3; k++) {
+        static const int32_t late[3] = {AQS_TREE_CONTRACTION, AQS_TREE_BISECTION, 7};
+        assert_int_equal(aqs_linkage_set_tree_builder(L, late[k]), AQS_ESTATE);
+        test_assert_contains(aqs_linkage_last_error(L), fn);
+        test_assert_contains(aqs_linkage_last_error(L), "finalized");
+        assert_int_equal(aqs_linkage_get_tree_stats(L, &t.nodes, &t.height, &t.mean_handles, &t.max_handles), AQS_OK);
+        assert_same_shape(&t, &bisection);
+    }
+    aqs_linkage_destroy(L);
+    /* and on the reference linkage: nothing else changes either */
+    L = reference(&ref);
+    FAILS(L, &ref, aqs_linkage_set_tree_builder(L, AQS_TREE_CONTRACTION), AQS_ESTATE, fn, "finalized");
+    FAILS(L, &ref, aqs_linkage_set_tree_builder(L, AQS_TREE_BISECTION), AQS_ESTATE, fn, "finalized");
+    FAILS(L, &ref, aqs_linkage_set_tree_builder(L, -1), AQS_ESTATE, fn, "finalized");
+    aqs_linkage_destroy(L);
+    /* NULL linkage */
+    assert_int_equal(aqs_linkage_set_tree_builder(NULL, AQS_TREE_BISECTION), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_tree_builder(NULL, 2), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(NULL), "linkage is NULL");
+}
+
 /* -------------------------------------------- loads and joint forces */
 
 static void test_load_errors(void **state)
@@ -624,6 +743,10 @@ static void test_numeric_failure(void **state)
     test_assert_contains(aqs_linkage_last_error(L), "aqs_linkage_solve");
     test_assert_contains(aqs_linkage_last_error(L), "non-finite");
     assert_int_equal(aqs_linkage_get_accelerations(L, v, NV), AQS_ESTATE);
+    assert_int_equal(aqs_joint_get_acceleration(L, 1, v, 1), AQS_ESTATE);
+    test_assert_contains(aqs_linkage_last_error(L), "nothing solved");
+    assert_int_equal(aqs_joint_get_constraint_force(L, 1, v), AQS_ESTATE);
+    test_assert_contains(aqs_linkage_last_error(L), "aqs_joint_get_constraint_force");
     assert_int_equal(aqs_linkage_step(L, 0.01), AQS_ENUMERIC);
     test_assert_contains(aqs_linkage_last_error(L), "aqs_linkage_step");
     assert_int_equal(aqs_linkage_get_positions(L, q, NQ), AQS_OK);
@@ -774,6 +897,7 @@ int main(void)
         cmocka_unit_test(test_create),
         cmocka_unit_test(test_building_failures),
         cmocka_unit_test(test_phases),
+        cmocka_unit_test(test_tree_builder_errors),
         cmocka_unit_test(test_load_errors),
         cmocka_unit_test(test_solve_errors),
         cmocka_unit_test(test_numeric_failure),

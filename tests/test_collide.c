@@ -2,7 +2,8 @@
  * (status, message naming the argument and value, linkage unchanged),
  * filters (joined bodies, welded bodies, groups and masks, exclusions),
  * shapes on welded bodies following their rigid group (closed form),
- * obstacles, the capacity protocol and any-contact. */
+ * obstacles, the capacity protocol and any-contact; NULL linkage and NULL
+ * outputs of the getters and setters; penalty contact. */
 #include "testutil.h"
 
 #include <math.h>
@@ -294,6 +295,14 @@ static void test_penalty_rest(void **state)
         for (step = 0; step < 400; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
         assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
         assert_true(fabs(c.depth - (9.81 * 0.5 + 10.0) / k) <= 0.02 * (9.81 * 0.5 + 10.0) / k);
+        /* clear_forces removes the user force but keeps the contact
+         * stiffness: back to the gravity-only rest depth; then the force again */
+        assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+        for (step = 0; step < 400; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
+        assert_int_equal(aqs_linkage_collide(L, AQS_COLLIDE_LAZY, &c, 1, &n), AQS_OK);
+        assert_true(fabs(c.depth - 9.81 * 0.5 / k) <= 0.02 * 9.81 * 0.5 / k);
+        assert_int_equal(aqs_body_set_force(L, 0, f, pt, NULL), AQS_OK);
+        for (step = 0; step < 400; step++) assert_int_equal(aqs_linkage_step(L, sqrt(1e-5)), AQS_OK);
     }
     /* off again: the pendulum falls through */
     assert_int_equal(aqs_linkage_set_contact_stiffness(L, 0.0), AQS_OK);
@@ -351,6 +360,77 @@ static void test_penalty_chain_rests(void **state)
     assert_true(test_max_abs_diff(qa, qe, 4) < 1e-6);
 }
 
+/* The error paths of the collision getters and setters not covered above.
+ * A NULL linkage is AQS_EINVAL for each of them, writes nothing through
+ * the out pointers, and (with no linkage to hold a message) the last error
+ * is the fixed NULL-linkage text naming the argument. A NULL count is
+ * AQS_EINVAL naming the function and the argument, and changes nothing.
+ * aqs_linkage_get_collision_stats takes no struct (so there is no size to
+ * get wrong): each out pointer may be NULL, and reading the statistics
+ * changes neither them nor the contacts. */
+static void test_collision_api_errors(void **state)
+{
+    static const double cube[24] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+    aqs_linkage *L = chain(4, 0.6, 0);
+    int32_t count = -7, hit = -7, out = -7, st[4] = {-7, -7, -7, -7}, st2[4], k, ns = -1;
+    size_t n0, n1;
+    (void)state;
+    /* NULL linkage */
+    assert_int_equal(aqs_linkage_get_shape_count(NULL, &count), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_shape_count(NULL, NULL), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_collision_stats(NULL, &st[0], &st[1], &st[2], &st[3]), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_collision_stats(NULL, NULL, NULL, NULL, NULL), AQS_EINVAL);
+    assert_int_equal(aqs_body_set_collision_filter(NULL, 0, 1u, 1u), AQS_EINVAL);
+    assert_int_equal(aqs_body_set_collision_filter(NULL, AQS_WORLD, 1u, 1u), AQS_EINVAL);
+    assert_int_equal(aqs_collision_exclude_pair(NULL, 0, 1), AQS_EINVAL);
+    assert_int_equal(aqs_collision_exclude_pair(NULL, AQS_WORLD, 0), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_any_contact(NULL, &hit), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_any_contact(NULL, NULL), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_collide_joined(NULL, 1), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_collide_joined(NULL, 0), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(NULL, 100.0), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(NULL, 0.0), AQS_EINVAL);
+    assert_int_equal(aqs_shape_add_hull(NULL, 0, cube, 8, O, Q1, &out), AQS_EINVAL);
+    assert_int_equal(aqs_shape_add_hull(NULL, AQS_WORLD, cube, 8, O, Q1, &out), AQS_EINVAL);
+    assert_int_equal(count, -7);
+    assert_int_equal(hit, -7);
+    assert_int_equal(out, -7);
+    for (k = 0; k < 4; k++) assert_int_equal(st[k], -7);
+    test_assert_contains(aqs_linkage_last_error(NULL), "linkage is NULL");
+    assert_string_equal(aqs_linkage_last_error(L), ""); /* L saw none of it */
+
+    /* NULL count: before and after finalize; nothing changes */
+    EXPECT_FAIL(L, aqs_linkage_get_shape_count(L, NULL), AQS_EINVAL, "aqs_linkage_get_shape_count", "count is NULL");
+    assert_int_equal(aqs_linkage_get_shape_count(L, &ns), AQS_OK);
+    assert_int_equal(ns, 4);
+    /* statistics before any query: all 0, NULL outputs accepted */
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &st[0], &st[1], &st[2], &st[3]), AQS_OK);
+    for (k = 0; k < 4; k++) assert_int_equal(st[k], 0);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, NULL, NULL, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_collide_joined(L, 1), AQS_OK);
+    n0 = count_contacts(L);
+    assert_int_equal(n0, 3);
+    EXPECT_FAIL(L, aqs_linkage_get_shape_count(L, NULL), AQS_EINVAL, "aqs_linkage_get_shape_count", "count is NULL");
+    n1 = count_contacts(L);
+    assert_int_equal(n1, n0);
+    /* statistics of that query: each output alone gives the same value as
+     * all four together, and reading does not reset them */
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &st[0], &st[1], &st[2], &st[3]), AQS_OK);
+    assert_true(st[2] >= 3); /* at least the three touching pairs reached libccd */
+    for (k = 0; k < 4; k++) st2[k] = -7;
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &st2[0], NULL, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, NULL, &st2[1], NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, NULL, NULL, &st2[2], NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, NULL, NULL, NULL, &st2[3]), AQS_OK);
+    for (k = 0; k < 4; k++) assert_int_equal(st2[k], st[k]);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, NULL, NULL, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_get_collision_stats(L, &st2[0], &st2[1], &st2[2], &st2[3]), AQS_OK);
+    for (k = 0; k < 4; k++) assert_int_equal(st2[k], st[k]);
+    assert_int_equal(count_contacts(L), n0);
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -361,6 +441,7 @@ int main(void)
         cmocka_unit_test(test_late_shapes_and_no_state),
         cmocka_unit_test(test_penalty_rest),
         cmocka_unit_test(test_penalty_chain_rests),
+        cmocka_unit_test(test_collision_api_errors),
     };
     return cmocka_run_group_tests_name("collide", tests, NULL, NULL);
 }

@@ -19,6 +19,8 @@
 //                handles)
 //   mass-ratio   masses (and inertias with them) log-uniform over 1e-3..1e3 (ratio 1e6),
 //                including chains alternating heavy and light bodies
+//   balance      chains and trees of revolute, prismatic, spherical and fixed joints, fixed or
+//                free base, gravity, a load on every body
 // Bodies and joints are added in a random order in about half of the cases; a third of the
 // cases use the library's recursive-bisection assembly tree instead of tree contraction.
 //
@@ -26,9 +28,12 @@
 // vector), S_j^T f_j = Q_j with the library's constraint forces (relative to ||f||), world
 // poses from aqs_linkage_get_body_poses_world and aqs_body_get_pose_world against the
 // reference's forward kinematics, the per-joint getters against the bulk arrays,
+// the per-body force balance f_j - sum_c X*_c f_c = I_i (a_i - g_i) - f_ext,i on the
+// library's own accelerations and constraint forces (no reference solution: balance_error),
 // and (reference self-check, small cases) M and tau of the reference against the literal
 // sums over bodies. Prints a table of the worst errors per group and "N passed, M failed";
-// exits non-zero on any failure. AQS_REFERENCE_GROUPS=a,b (optional) runs only those groups.
+// exits non-zero on any failure, and when a full run compared fewer than kMinCases (300)
+// linkages. AQS_REFERENCE_GROUPS=a,b (optional) runs only those groups.
 #include <aqs.h>
 
 #include <algorithm>
@@ -59,14 +64,21 @@ struct Tolerance {
     double cf;     // constraint forces, relative 2-norm over the whole vector
     double stf;    // ||S^T f - Q|| / ||f|| over all joints
     double pose;   // position error / max(1, |p|), rotation matrix error
+    double bal;    // per-body force balance residual / size of its terms (balance_error)
 };
 
 // Well-conditioned cases (masses within a factor 10, principal inertias within a factor ~9):
 // the DCA in joint frames is accurate to ~1e-12 (MATH.md §8; measured here: worst 4e-13 over
 // all such groups) and the reference (long double) to ~1e-15, so 1e-9 leaves a wide margin
 // and still catches any real mistake (a wrong sign or frame gives O(1) errors). World poses:
-// worst measured 5e-14 (500-body chains), bound 1e-12.
-const Tolerance kTolWell = {1e-9, 1e-9, 1e-9, 1e-12};
+// worst measured 5e-14 (500-body chains), bound 1e-12. Per-body force balance
+// (balance_error, the library's outputs only): its residual sums constraint forces and
+// inertias times accelerations, so it carries their errors; measured worst 4.7e-14 (large
+// group) with the default exact solver (AQS_EXACT_ABA), 3.2e-13 (large and resolve groups)
+// with AQS_EXACT_DCA; bound 1e-9 as for the forces. Sensitivity, checked by mutating the
+// check: every constraint force scaled by 1 + 1e-7 gives 6e-8 (fails), a sign error in the
+// acceleration transform or in gravity ~1.
+const Tolerance kTolWell = {1e-9, 1e-9, 1e-9, 1e-12, 1e-9};
 
 // Mass ratios up to 1e6 (masses log-uniform over 1e-3..1e3, or alternating 1e3 / 1e-3,
 // inertias scaling with the masses). The DCA is intrinsically less accurate than a dense
@@ -88,12 +100,20 @@ const Tolerance kTolWell = {1e-9, 1e-9, 1e-9, 1e-12};
 // Tolerances: acc 1e-5 (20x the worst of 4000), cf and S^T f - Q 1e-3 (4x the worst of
 // 4000, 1e4x this group's worst). A frame, sign or formula error still gives O(1) here, and
 // the well-conditioned groups hold every formula to 1e-9.
-const Tolerance kTolMassRatio = {1e-5, 1e-3, 1e-3, 1e-12};
+// Per-body force balance, measured on this group's 40 cases: worst 1.6e-11 with the default
+// exact solver (AQS_EXACT_ABA), 2.9e-7 with AQS_EXACT_DCA. Two sweeps of 4000 cases of this
+// group's recipe (seeds past its 40; one with 0.4%, one with 40% alternating masses), DCA:
+// median 9e-12 and 1e-10, 99.9% 2.7e-6 and 1.5e-4, max 2.3e-5 and 7.4e-4 (cf on the same:
+// max 1.7e-4 and 1.5e-4); ABA: max 7.9e-8 and 1.6e-7. Tolerance 3e-3: 4x the worst of 8000,
+// as cf's 1e-3 is 4x its worst. (The same sweeps exceed this group's acc tolerance in a few
+// cases beyond its 40: DCA 1 of 8000 at 1.9e-5; ABA 10 of 8000, up to 1.5e-4, random and
+// deep trees. This group's own 40 cases meet it.)
+const Tolerance kTolMassRatio = {1e-5, 1e-3, 1e-3, 1e-12, 3e-3};
 
 // Large linkages (200..500 bodies): cond(M) grows with the chain length (MATH.md §8: 5.5e7
 // for a 400-link chain); the DCA error stays ~1e-12 (measured: 3e-13), so the
 // well-conditioned bound holds.
-const Tolerance kTolLarge = {1e-9, 1e-9, 1e-9, 1e-12};
+const Tolerance kTolLarge = {1e-9, 1e-9, 1e-9, 1e-12, 1e-9};
 
 // Reference self-checks (both in long double): the regrouped M and tau against the literal
 // sums over bodies (small cases), and S^T f = Q with the reference's own forces, which must
@@ -102,6 +122,9 @@ const Tolerance kTolLarge = {1e-9, 1e-9, 1e-9, 1e-12};
 // 5e-20 rounding, still 1e7 below the library's tolerance.)
 const double kTolLiteral = 1e-13;
 const double kSelfMargin = 1e-3;
+
+// The full run compares at least this many random linkages (main() fails otherwise).
+const int kMinCases = 300;
 
 // ---------------------------------------------------------------------------------------
 // Deterministic random numbers (splitmix64; no dependence on the standard library's
@@ -189,6 +212,7 @@ struct Spec {
     double p_fixed = 0.1;          // probability of a fixed joint (non-root)
     bool zero_mass = false;        // zero-mass bodies welded to massive ones
     bool free_tau = false;         // non-zero Q on free joints
+    double p_load = 0.5;           // probability that a body carries an external load
     bool permute = false;          // random order of bodies and joints
     Mode mode = MODE_PLAIN;
     Tolerance tol = kTolWell;
@@ -391,7 +415,7 @@ Scenario generate(const Spec &sp) {
     sc.loads.resize((size_t)n);
     // Load magnitudes follow the body weights, so that no load is negligible in every case.
     for (int b = 0; b < n; ++b)
-        if (r.chance(0.5)) random_load(r, sc.loads[b], 2.0 * std::max(m.bodies[b].mass, sp.mass_lo));
+        if (r.chance(sp.p_load)) random_load(r, sc.loads[b], 2.0 * std::max(m.bodies[b].mass, sp.mass_lo));
     // Without gravity make sure something pushes.
     if (!sp.gravity) random_load(r, sc.loads[(size_t)r.integer(0, n - 1)], 2.0 * sp.mass_hi);
     sc.tau.resize((size_t)n);
@@ -552,7 +576,7 @@ LibOut read_results(aqs_linkage *L, const Model &m, int nv) {
 // ---------------------------------------------------------------------------------------
 
 struct Errors {
-    double acc = 0, cf = 0, stf = 0, pose = 0, literal = 0;
+    double acc = 0, cf = 0, stf = 0, pose = 0, bal = 0, literal = 0;
 };
 
 double nan_max(double a, double b) { return (std::isnan(a) || std::isnan(b)) ? NAN : std::max(a, b); }
@@ -589,6 +613,95 @@ double pose_error(const std::vector<double> &poses, const std::vector<aqsref::Po
     return worst;
 }
 
+// Per-body force balance on the library's own outputs. Nothing of the reference solver is
+// used: only the model as handed to the library (masses, joint placements, positions, loads,
+// gravity), the kinematics helpers of dense_reference.hpp (joint motion, motion subspace,
+// forward kinematics, spatial inertia) and the library's joint accelerations and constraint
+// forces. For every body i, with j its parent joint and c its child joints, Newton-Euler
+// reads (body i's frame, about its origin, torque first)
+//   f_j - sum_c X*_c f_c = I_i (a_i - g_i) - f_ext,i
+// f_j: what joint j exerts on i (row j of the library's constraint forces); -f_c: what the
+// child of joint c pushes back on i, moved from that child's frame into i's by the force
+// transform X*_c; a_i = X_j a_parent + S_j qdd_j: i's spatial acceleration built up from the
+// world (a = 0) with the library's qdd (zero velocities: no velocity-product terms; a free
+// joint's qdd is a_i itself, S = I6, gravity included); g_i = [0; R_i^T g]: gravity in i's
+// frame; f_ext,i: the applied loads in i's frame. Welded (fixed-joint) bodies and zero-mass
+// bodies are balanced like any other. Together with S_j^T f_j = Q_j (compare()) these are all
+// the equations of motion, so this holds only if the accelerations and forces are the
+// solution. Returns ||r|| / ||terms|| over all bodies: r the residuals, ||terms||^2 the sum
+// over bodies of the squared norms of f_j, each X*_c f_c, I_i a_i, I_i g_i and f_ext,i (the
+// size of what is summed, so that a free-falling body, whose forces all vanish, is still
+// measured against its weight). Long double, so only the library's errors show.
+double balance_error(const Model &m, const LibOut &o) {
+    using aqsref::Mat3;
+    using aqsref::Mat6;
+    using aqsref::Vec3;
+    using aqsref::Vec6;
+    const aqsref::Topology t = aqsref::make_topology(m);
+    const std::vector<aqsref::Pose> pose = aqsref::world_poses(m, t);
+    const int nb = (int)m.bodies.size(), nj = (int)m.joints.size();
+    if ((int)o.acc.size() != t.nv || (int)o.cf.size() != 6 * nj) return INFINITY;
+    std::vector<Mat6> Xf((size_t)nj);  // force transform, child frame -> parent frame
+    std::vector<Vec6> acc((size_t)nb, Vec6::Zero());
+    for (int j : t.order) {  // parents before children
+        const aqsref::Joint &jt = m.joints[j];
+        const double *q = m.positions.data() + t.q_offset[j];
+        const Mat3 RJ = aqsref::quat_to_matrix(jt.quat[0], jt.quat[1], jt.quat[2], jt.quat[3]);
+        const aqsref::Pose mo = aqsref::joint_motion(jt, q);
+        const Mat3 R = RJ * mo.R;                              // child axes in the parent frame
+        const Vec3 p = aqsref::to_vec3(jt.pos) + RJ * mo.p;  // child origin in the parent frame
+        Xf[j] = Mat6::Zero();
+        Xf[j].block<3, 3>(0, 0) = R;
+        Xf[j].block<3, 3>(0, 3) = aqsref::skew(p) * R;
+        Xf[j].block<3, 3>(3, 3) = R;
+        Vec6 a = Vec6::Zero();
+        if (jt.parent >= 0) {  // the parent's acceleration at the child origin, child axes
+            const Vec6 &ap = acc[(size_t)jt.parent];
+            a.head<3>() = R.transpose() * ap.head<3>();
+            a.tail<3>() = R.transpose() * (ap.tail<3>() - p.cross(ap.head<3>()));
+        }
+        const aqsref::Mat6X S = aqsref::motion_subspace_child(jt, q);
+        for (int k = 0; k < (int)S.cols(); ++k)
+            a += S.col(k) * (Real)o.acc[(size_t)t.v_offset[j] + k];
+        acc[(size_t)jt.child] = a;
+    }
+    std::vector<Vec6> r((size_t)nb, Vec6::Zero());
+    for (const aqsref::BodyForce &bf : m.body_forces) {  // + f_ext,i
+        const Mat3 &R = pose[(size_t)bf.body].R;
+        const Vec3 F = R.transpose() * aqsref::to_vec3(bf.force);
+        Vec6 fe;
+        fe.head<3>() = aqsref::to_vec3(bf.point).cross(F) + R.transpose() * aqsref::to_vec3(bf.torque);
+        fe.tail<3>() = F;
+        r[(size_t)bf.body] += fe;
+    }
+    long double terms = 0;
+    for (int b = 0; b < nb; ++b) {  // - I_i (a_i - g_i)
+        terms += r[(size_t)b].squaredNorm();
+        const Mat6 I = aqsref::spatial_inertia(m.bodies[(size_t)b], aqsref::Pose());
+        Vec6 g = Vec6::Zero();
+        g.tail<3>() = pose[(size_t)b].R.transpose() * aqsref::to_vec3(m.gravity);
+        const Vec6 Ia = I * acc[(size_t)b], Ig = I * g;
+        r[(size_t)b] += Ig - Ia;
+        terms += Ia.squaredNorm() + Ig.squaredNorm();
+    }
+    for (int j = 0; j < nj; ++j) {  // + f_j on its child, - X*_j f_j on its parent
+        const aqsref::Joint &jt = m.joints[j];
+        Vec6 f;
+        for (int k = 0; k < 6; ++k) f(k) = (Real)o.cf[6 * (size_t)j + k];
+        r[(size_t)jt.child] += f;
+        terms += f.squaredNorm();
+        if (jt.parent >= 0) {
+            const Vec6 fp = Xf[j] * f;
+            r[(size_t)jt.parent] -= fp;
+            terms += fp.squaredNorm();
+        }
+    }
+    long double num = 0;
+    for (const Vec6 &x : r) num += x.squaredNorm();
+    if (std::isnan((double)num)) return NAN;
+    return (double)std::sqrt(terms > 0 ? num / terms : num);
+}
+
 Errors compare(const Model &m, const aqsref::Solution &s, const LibOut &o) {
     Errors e;
     std::vector<long double> racc((size_t)s.nv), rcf;
@@ -616,6 +729,7 @@ Errors compare(const Model &m, const aqsref::Solution &s, const LibOut &o) {
     den = std::max(den, 1e-6L * s.load_scale * s.load_scale);  // floor as for e.cf
     e.stf = (double)std::sqrt(den > 0 ? num / den : num);
     e.pose = nan_max(pose_error(o.poses, s.pose), pose_error(o.single_poses, s.pose));
+    e.bal = balance_error(m, o);
     return e;
 }
 
@@ -742,6 +856,7 @@ void judge(const Errors &e, const Tolerance &tol, GroupStats &g, Outcome &out, c
     g.worst.cf = nan_max(g.worst.cf, e.cf);
     g.worst.stf = nan_max(g.worst.stf, e.stf);
     g.worst.pose = nan_max(g.worst.pose, e.pose);
+    g.worst.bal = nan_max(g.worst.bal, e.bal);
     char buf[512];
     auto fail = [&](const char *what, double err, double t) {
         std::snprintf(buf, sizeof buf, " [%s] %s error %.3e > %.1e;", where.c_str(), what, err, t);
@@ -752,6 +867,7 @@ void judge(const Errors &e, const Tolerance &tol, GroupStats &g, Outcome &out, c
     if (!(e.cf <= tol.cf)) fail("constraint forces", e.cf, tol.cf);
     if (!(e.stf <= tol.stf)) fail("S^T f - Q", e.stf, tol.stf);
     if (!(e.pose <= tol.pose)) fail("world poses", e.pose, tol.pose);
+    if (!(e.bal <= tol.bal)) fail("per-body force balance", e.bal, tol.bal);
 }
 
 Outcome run_case(const Spec &sp, GroupStats &g) {
@@ -1073,6 +1189,26 @@ std::vector<Spec> make_specs() {
         s.tol = kTolMassRatio;
         add(s);
     }
+    r = Rng(112);
+    // balance: 12 chains and branched trees of revolute, prismatic and spherical joints with
+    // fixed joints among them, fixed or floating (free) base, gravity on, a random load on
+    // every body; zero-mass welded bodies in a third. Judged like every case, and aimed at the
+    // per-body force balance (balance_error), which uses the library's outputs only.
+    const Shape balance_shapes[] = {CHAIN, RANDOM_TREE, BUSHY, DEEP_TREE, STAR, CATERPILLAR};
+    for (int i = 0; i < 12; ++i) {
+        Spec s;
+        s.group = "balance";
+        s.n = 5 + r.integer(0, 55);
+        s.shape = balance_shapes[i % 6];
+        s.base = i % 2 ? BASE_FREE : BASE_JOINT;
+        s.types = {aqsref::REVOLUTE, aqsref::PRISMATIC, aqsref::SPHERICAL};
+        s.p_fixed = 0.25;
+        s.zero_mass = i % 3 == 0;
+        s.gravity = true;
+        s.p_load = 1.0;
+        s.permute = r.chance(0.5);
+        add(s);
+    }
     return v;
 }
 
@@ -1081,7 +1217,8 @@ std::vector<Spec> make_specs() {
 int main() {
     std::vector<Spec> specs = make_specs();
     // Debugging aid: AQS_REFERENCE_GROUPS=chain,tree runs only those groups.
-    if (const char *only = std::getenv("AQS_REFERENCE_GROUPS")) {
+    const char *only = std::getenv("AQS_REFERENCE_GROUPS");
+    if (only) {
         const std::string list = std::string(",") + only + ",";
         specs.erase(std::remove_if(specs.begin(), specs.end(),
                                    [&](const Spec &sp) {
@@ -1126,16 +1263,25 @@ int main() {
         std::printf("   %d cases, %d failed (%.2f s)\n", prev.cases, prev.failed, prev.seconds);
     }
     const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("\n%-12s %5s %6s %5s %10s %10s %10s %10s %10s %10s  %s\n", "group", "cases",
-                "failed", "max n", "acc", "cf", "S^T f-Q", "pose", "step", "ref-self", "tol(acc, cf, stf, pose)");
+    std::printf("\n%-12s %5s %6s %5s %10s %10s %10s %10s %10s %10s %10s  %s\n", "group", "cases",
+                "failed", "max n", "acc", "cf", "S^T f-Q", "balance", "pose", "step", "ref-self",
+                "tol(acc, cf, stf, balance, pose)");
     for (const std::string &name : order) {
         const GroupStats &g = groups[name];
-        std::printf("%-12s %5d %6d %5d %10.2e %10.2e %10.2e %10.2e %10.2e %10.2e  %.0e %.0e %.0e %.0e  (%.2f s)\n",
+        std::printf("%-12s %5d %6d %5d %10.2e %10.2e %10.2e %10.2e %10.2e %10.2e %10.2e  %.0e %.0e %.0e %.0e %.0e  (%.2f s)\n",
                     name.c_str(), g.cases, g.failed, g.max_bodies, g.worst.acc, g.worst.cf,
-                    g.worst.stf, g.worst.pose, g.step, g.worst.literal, g.tol.acc, g.tol.cf, g.tol.stf,
-                    g.tol.pose, g.seconds);
+                    g.worst.stf, g.worst.bal, g.worst.pose, g.step, g.worst.literal, g.tol.acc,
+                    g.tol.cf, g.tol.stf, g.tol.bal, g.tol.pose, g.seconds);
     }
     std::printf("total time %.2f s\n", total);
     std::printf("%d passed, %d failed\n", passed, failed);
-    return failed == 0 ? 0 : 1;
+    // The full run must compare at least kMinCases random linkages: a generator or group
+    // change that silently drops cases fails here (not checked when groups are selected).
+    bool enough = true;
+    if (!only && passed + failed < kMinCases) {
+        std::printf("FAIL only %d random linkages compared, at least %d required\n", passed + failed,
+                    kMinCases);
+        enough = false;
+    }
+    return failed == 0 && enough ? 0 : 1;
 }
