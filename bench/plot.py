@@ -76,7 +76,10 @@ def time_and_joints(rows, title, out):
         line, = ax_t.semilogy(x, [r["ms_per_step"] for r in g], "o-", ms=3,
                               label=f"adaptive, N_f = {nf}")
         ax_t.semilogy(x, [r["exact_ms_per_step"] for r in g], "--", color=line.get_color(),
-                      lw=1, label=f"exact (interleaved), N_f = {nf}")
+                      lw=1, label=f"exact, articulated-body (interleaved), N_f = {nf}")
+        if "exact_dca_ms_per_step" in g[0]:
+            ax_t.semilogy(x, [r["exact_dca_ms_per_step"] for r in g], ":",
+                          color=line.get_color(), lw=1, label=f"exact, DCA, N_f = {nf}")
         ax_n.semilogy(x, [r["computed_joints"] for r in g], "o-", ms=3,
                       color=line.get_color(), label=f"N_f = {nf}")
     joints = rows[0]["joints"]
@@ -161,7 +164,10 @@ def scaling(path, out):
         return False
     n = [r["joints"] for r in rows]
     fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(11, 4.2))
-    ax_t.loglog(n, [r["exact_ms_per_step"] for r in rows], "s-", label="exact step")
+    ax_t.loglog(n, [r["exact_ms_per_step"] for r in rows], "s-",
+                label="exact step (articulated-body)")
+    if all("exact_dca_ms_per_step" in r for r in rows):
+        ax_t.loglog(n, [r["exact_dca_ms_per_step"] for r in rows], "d-", label="exact step (DCA)")
     ax_t.loglog(n, [r["ms_per_step"] for r in rows], "o-",
                 label="adaptive step, N_f = 1, 2^-19")
     ax_t.loglog(n, [1e3 * r["finalize_s"] for r in rows], "^-", label="finalize")
@@ -191,13 +197,18 @@ def tables(sets, scaling_path):
         print(f"\n{label}: {r0['joints']:,} joints, run {r0['run_id']}, {r0['steps']} steps, "
               f"load average {min(r['loadavg1'] for r in rows):.2f}-"
               f"{max(r['loadavg1'] for r in rows):.2f}\n")
-        print("| N_f | eps | ms/step | exact ms/step | speedup | N_E | nodes updated | R "
-              "| displ. error | max bound |")
-        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        dca = "exact_dca_ms_per_step" in r0
+        print("| N_f | eps | ms/step | exact ms/step | speedup |"
+              + (" DCA ms/step | speedup vs DCA |" if dca else "")
+              + " N_E | nodes updated | R | displ. error | max bound |")
+        print("|---:|---:|---:|---:|---:|" + ("---:|---:|" if dca else "")
+              + "---:|---:|---:|---:|---:|")
         for nf, g in by_forces(rows).items():
             for r in g:
+                extra = (f"{r['exact_dca_ms_per_step']:.4g} | {r['speedup_dca']:.3g} | "
+                         if dca else "")
                 print(f"| {nf} | 2^-{r['eps_log2']} | {r['ms_per_step']:.3g} | "
-                      f"{r['exact_ms_per_step']:.4g} | {r['speedup']:.3g} | "
+                      f"{r['exact_ms_per_step']:.4g} | {r['speedup']:.3g} | {extra}"
                       f"{r['computed_joints']:,.1f} | {r['nodes_updated']:,.1f} | "
                       f"{r['ratio_R']:.2f} | {r['displacement_error']:.2g} | "
                       f"{r['max_error_bound']:.2g} |")
@@ -206,13 +217,15 @@ def tables(sets, scaling_path):
     if latest:
         print("\nscaling\n")
         print("| joints | tree height | finalize s | exact ms/step (interleaved / ref. run) "
-              "| adaptive ms/step | N_E | R | exact B/joint | adaptive B/joint "
-              "| peak RSS B/joint | load |")
-        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+              "| exact µs/joint | DCA ms/step | adaptive ms/step | N_E | R | exact B/joint "
+              "| adaptive B/joint | peak RSS B/joint | load |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for n in sorted(latest):
             r = latest[n]
             print(f"| {n:,} | {r['tree_height']} | {r['finalize_s']:.2f} | "
                   f"{r['exact_ms_per_step']:.4g} / {r['exact_ref_ms_per_step']:.4g} | "
+                  f"{1e3 * r['exact_ms_per_step'] / n:.3g} | "
+                  f"{r.get('exact_dca_ms_per_step', float('nan')):.4g} | "
                   f"{r['ms_per_step']:.3g} | {r['computed_joints']:.1f} | "
                   f"{r['ratio_R']:.2f} | {r['exact_linkage_bytes'] / n:,.0f} | "
                   f"{r['adaptive_linkage_bytes'] / n:,.0f} | {r['peak_rss_bytes'] / n:,.0f} | "
