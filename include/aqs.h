@@ -175,14 +175,20 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *linkage, int32_t type, int32_t par
 #define AQS_TREE_BISECTION 1
 AQS_API aqs_status aqs_linkage_set_tree_builder(aqs_linkage *linkage, int32_t builder);
 
-/** Validate the linkage and build the assembly tree and all coefficients.
+/** Validate the linkage and build the assembly tree (topology and frames)
+ *  and the exact solver's memory. The DCA coefficients of the tree (O(N)
+ *  memory) are allocated and computed only when first needed: at finalize
+ *  when the exact solver is AQS_EXACT_DCA, otherwise by the first
+ *  aqs_linkage_set_tolerance / set_max_computed / set_exact_solver(DCA).
  *  Checks, reporting the first problem by body/joint index (AQS_EMODEL):
  *  at least one body; each body the child of exactly one joint; every body
  *  connected to the world (no cycles); every
  *  rigid group formed by fixed joints with positive mass and a positive
  *  definite inertia (unless welded to the world).
  *  Returns AQS_OK, AQS_EMODEL, AQS_ESTATE (already finalized), AQS_ENOMEM,
- *  AQS_ENUMERIC. On failure the linkage stays unfinalized and editable. */
+ *  AQS_ENUMERIC (with the DCA as exact solver; the articulated-body solver
+ *  reports a singular articulated inertia at its first solve). On failure the
+ *  linkage stays unfinalized and editable. */
 AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *linkage);
 
 /** Sizes. Any phase. Each out pointer may be NULL.
@@ -291,7 +297,9 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
  *  the tree after every step (the paper's exact solver; its per-node time is
  *  the benchmarks' reference for the adaptive solve). Both give the same
  *  accelerations and constraint forces up to rounding. Any phase; the
- *  choice takes effect at the next solve. Returns AQS_OK, AQS_EINVAL. */
+ *  choice takes effect at the next solve. Choosing the DCA after finalize
+ *  allocates the tree's DCA coefficients if no tolerance did (O(N) memory).
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ENOMEM (nothing changed). */
 #define AQS_EXACT_ABA 0
 #define AQS_EXACT_DCA 1
 AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *linkage, int32_t solver);
@@ -315,8 +323,9 @@ AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *linkage, int3
  *  means exact: every joint is computed). With eps > 0 a solve computes only
  *  the joints that matter, in decreasing order of their subassemblies' total
  *  acceleration, until the certified bound is <= eps. The first eps > 0
- *  allocates the total-acceleration factors (O(N) memory) and schedules their
- *  computation at the next solve. Any phase after finalize.
+ *  allocates the DCA coefficients (unless the DCA solver did) and the
+ *  total-acceleration factors (O(N) memory) and schedules their computation
+ *  at the next solve. Any phase after finalize.
  *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *linkage, int32_t metric, double eps);
 

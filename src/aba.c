@@ -37,7 +37,8 @@ aqs_status aba_alloc(aqs_linkage *L)
     a->acc = lk_calloc(L, 6 * ((size_t)m->ncomp + 1), sizeof(double));
     a->U = lk_calloc(L, 6 * (size_t)L->nv + 1, sizeof(double));
     a->u = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
-    if (!a->order || !a->IA || !a->pA || !a->acc || !a->U || !a->u) return AQS_ENOMEM;
+    a->x = lk_calloc(L, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
+    if (!a->order || !a->IA || !a->pA || !a->acc || !a->U || !a->u || !a->x) return AQS_ENOMEM;
     /* Bodies come parents first; a composite's root body carries its
      * effective parent joint. */
     for (k = 0; k < L->nbodies; k++) {
@@ -57,6 +58,7 @@ void aba_free(aqs_linkage *L)
     lk_free(L, a->acc);
     lk_free(L, a->U);
     lk_free(L, a->u);
+    lk_free(L, a->x);
     memset(a, 0, sizeof *a);
 }
 
@@ -224,8 +226,9 @@ static void forward(aqs_linkage *L)
     }
 }
 
-/* Fixed joints: dca_welded_forces_comp reads a composite's leaf handle
- * forces, so write them from the joint forces just computed: the force on
+/* Fixed joints: dca_welded_forces_comp takes a composite's leaf handle
+ * forces, so form them (in L->aba.x, not in the tree, whose coefficients may
+ * not even be allocated) from the joint forces just computed: the force on
  * the composite through handle h, in the handle's frame (its own frame for
  * its parent joint, the joint frame for a joint it holds up). */
 static void welded_forces(aqs_linkage *L)
@@ -238,7 +241,7 @@ static void welded_forces(aqs_linkage *L)
         double *x;
         if (!m->comp_welded[c]) continue;
         leaf = &t->nodes[t->leaf_of_comp[c]];
-        x = t->data + leaf->xf;
+        x = L->aba.x;
         for (h = 0; h < leaf->nh; h++) {
             int32_t e = t->handles[leaf->handles + h];
             const double *f = L->cforce + 6 * (size_t)m->eff_joint[e];
@@ -250,7 +253,7 @@ static void welded_forces(aqs_linkage *L)
                 for (i = 0; i < 6; i++) x[6 * h + i] = -fj[i];
             }
         }
-        dca_welded_forces_comp(L, c);
+        dca_welded_forces_comp(L, c, x);
     }
 }
 

@@ -104,7 +104,7 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
         const node *c = &L->t.nodes[child[i]];
         if (c->joint >= 0) kids[nk++] = child[i];
         else if (L->m.comp_welded[c->comp]) {
-            dca_welded_forces_comp(L, c->comp);
+            dca_welded_forces_comp(L, c->comp, L->t.data + c->xf);
             s->reached[s->nreached++] = c->comp;
         }
     }
@@ -200,7 +200,8 @@ void adaptive_solve(aqs_linkage *L)
         s->all = 1;
         s->bound = 0.0;
         s->a_root = 0.0;
-        if (L->m.comp_welded[L->m.ncomp]) dca_welded_forces_comp(L, L->m.ncomp);
+        if (L->m.comp_welded[L->m.ncomp])
+            dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
         s->valid = 1;
         return;
     }

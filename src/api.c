@@ -214,6 +214,10 @@ AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *L, int32_t solver)
     CHECK_LINKAGE(L);
     if (solver != AQS_EXACT_ABA && solver != AQS_EXACT_DCA)
         return lk_fail(L, AQS_EINVAL, "%s: solver = %d is not an AQS_EXACT_* value", fn, (int)solver);
+    if (solver == AQS_EXACT_DCA && L->finalized) {
+        aqs_status st = dca_enable(L, fn); /* O(N) memory, as for a tolerance */
+        if (st != AQS_OK) return st;
+    }
     if (solver != L->exact_solver) {
         L->exact_solver = solver;
         L->s.valid = 0;
@@ -422,19 +426,16 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
     for (n = 0; n < L->t.nnodes; n++)
-        if (L->t.nodes[n].joint < 0) {
-            update_leaf_poses(L, n);
-            dca_leaf_phi(L, n);
-        }
+        if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
     update_all_poses(L);
     update_mark_all(L);
-    if (L->s.eps > 0.0 && (st = totalacc_enable(L, fn)) != AQS_OK) {
-        free_solver(L);
-        return st;
-    }
-    if ((st = update_coefficients(L)) != AQS_OK) {
-        free_solver(L);
-        return st;
+    /* The DCA coefficients only when the DCA is the exact solver (tolerances
+     * and caps are set after finalize and allocate them then). */
+    if (L->exact_solver == AQS_EXACT_DCA) {
+        if ((st = dca_enable(L, fn)) != AQS_OK || (st = update_coefficients(L)) != AQS_OK) {
+            free_solver(L);
+            return st;
+        }
     }
     L->finalized = 1;
     L->solved = 0;
@@ -629,6 +630,9 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
         }
         L->exact_by_aba = 1;
     } else {
+        /* the setters that lead here allocate the DCA coefficients; a linkage
+         * that cannot move (no tree node) gets its few bytes here */
+        if ((st = dca_enable(L, fn)) != AQS_OK) return st;
         if ((st = update_coefficients(L)) != AQS_OK) return st;
         adaptive_solve(L);
     }

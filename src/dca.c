@@ -41,6 +41,23 @@ static void symmetrize_blocks(double *phi, int32_t nh, int diagonal)
     }
 }
 
+aqs_status dca_enable(aqs_linkage *L, const char *fn)
+{
+    tree *t = &L->t;
+    int32_t n;
+    if (t->data) return AQS_OK;
+    t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
+    if (!t->data)
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
+                       (long long)t->ndata);
+    for (n = 0; n < t->nnodes; n++)
+        if (t->nodes[n].joint < 0) dca_leaf_phi(L, n);
+    /* every b and internal node from scratch, loads and gravity included */
+    t->all_dirty = 1;
+    L->loads_dirty = L->gravity_dirty = 1;
+    return AQS_OK;
+}
+
 void dca_leaf_phi(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
@@ -378,13 +395,12 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
 }
 
 /* Acceleration minus g (root trick) of a composite, in its frame, from its
- * leaf's handle forces: a' = I^{-1} (f + sum_h X_h^T x_h). The world's is -g. */
-static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
+ * leaf's handle forces x: a' = I^{-1} (f + sum_h X_h^T x_h). The world's is -g. */
+static void comp_acceleration(const aqs_linkage *L, int32_t c, const double *x, double a[6])
 {
     const tree *t = &L->t;
     const node *nd;
     const pose *P;
-    const double *x;
     double f[6], tmp[6];
     int32_t h, i;
     if (c == L->m.ncomp) {
@@ -394,7 +410,6 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
     }
     nd = &t->nodes[t->leaf_of_comp[c]];
     P = t->poses + nd->poses;
-    x = t->data + nd->xf;
     memcpy(f, L->m.comp_force + 6 * c, sizeof f);
     for (h = 0; h < nd->nh; h++) {
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
@@ -409,18 +424,17 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, double a[6])
  * forces f_e of the moving joints held by the composite come from its
  * leaf's handle forces (f_e = -x_h in e's joint frame), so only the leaf's
  * forces are needed. */
-void dca_welded_forces_comp(aqs_linkage *L, int32_t c)
+void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
 {
     const model *m = &L->m;
     const tree *t = &L->t;
     const node *leaf = &t->nodes[t->leaf_of_comp[c]];
     const pose *P = t->poses + leaf->poses;
-    const double *x = t->data + leaf->xf;
     double *acc = L->welded_acc, ca[6];
     int32_t k, h, i, first = m->member_start[c], last = m->member_start[c + 1];
     pose Pc;
     int have_pose = 0;
-    comp_acceleration(L, c, ca);
+    comp_acceleration(L, c, x, ca);
     for (k = first; k < last; k++) memset(acc + 6 * m->members[k], 0, 6 * sizeof(double));
     for (h = 0; h < leaf->nh; h++) {
         int32_t e = t->handles[leaf->handles + h], p = L->joints[m->eff_joint[e]].parent;

@@ -5,6 +5,11 @@
 
 #include "linkage.h"
 
+/* Allocate the tree's DCA coefficients (Phi, b, handle forces, W, U, ...)
+ * and compute the leaves' Phi, once: a linkage solved only exactly by the
+ * articulated-body algorithm never needs them. Marks every node stale.
+ * AQS_OK or AQS_ENOMEM (message naming fn). */
+aqs_status dca_enable(aqs_linkage *L, const char *fn);
 /* Leaf Phi (constant after finalize; the world leaf's is zero). */
 void dca_leaf_phi(aqs_linkage *L, int32_t n);
 /* Leaf b from the composite's external load (world leaf: from gravity). */
@@ -23,7 +28,8 @@ void dca_form_W(const aqs_linkage *L, int32_t n, double W[36]);
  * the children's handle forces. */
 void dca_node_backsub(aqs_linkage *L, int32_t n);
 /* Constraint forces of the fixed joints inside composite c, from its leaf's
- * handle forces (set when the leaf's parent node was back-substituted). */
-void dca_welded_forces_comp(aqs_linkage *L, int32_t c);
+ * handle forces x (6 per handle, in the handles' frames: the DCA's are set
+ * when the leaf's parent node was back-substituted). */
+void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x);
 
 #endif

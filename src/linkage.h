@@ -133,6 +133,7 @@ typedef struct {
     double *acc;    /* (ncomp + 1) x 6: acceleration minus g (root trick); world last */
     double *U;      /* nv x 6: row k of joint e is IA S_k (S_k: dof k's column of S) */
     double *u;      /* nv: Q - S^T pA */
+    double *x;      /* 6 x max handles: a welded composite's leaf handle forces */
 } aba_state;
 
 struct aqs_linkage {

@@ -23,6 +23,8 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
     int64_t size = 0;
     int32_t n, maxh = t->max_handles;
     double *tdata, *scratch;
+    aqs_status st;
+    if ((st = dca_enable(L, fn)) != AQS_OK) return st;
     for (n = 0; n < t->nnodes; n++) {
         node *nd = &t->nodes[n];
         int64_t cols = 6 * (int64_t)nd->nh + 1;

@@ -134,7 +134,7 @@ void update_mark_all(aqs_linkage *L) { L->t.all_dirty = 1; }
 /* Refresh a leaf's b and mark its ancestors. */
 static void refresh_leaf(aqs_linkage *L, int32_t leaf)
 {
-    dca_leaf_b(L, leaf);
+    if (L->t.data) dca_leaf_b(L, leaf); /* else dca_enable computes every b later */
     update_mark(L, L->t.nodes[leaf].parent);
 }
 

@@ -260,6 +260,63 @@ static void test_exact_solver_errors(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* A linkage solved only exactly never allocates the DCA coefficients; the
+ * DCA (or a tolerance) allocates them once, and when that allocation fails
+ * the call returns AQS_ENOMEM and changes nothing. */
+static void test_dca_coefficients_on_demand(void **state)
+{
+    counting_state cs = {0, 0, 0, 0, 0};
+    aqs_linkage *L = NULL;
+    int32_t i, solver;
+    long before;
+    double qdd0[40], qdd1[40];
+    int32_t nv;
+    (void)state;
+    assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, &cs, &L), AQS_OK);
+    for (i = 0; i < 40; i++) {
+        test_add_body(L, 1.0, 0.5, 0, 0, 0.1);
+        test_add_joint(L, i % 3 == 2 ? AQS_JOINT_FIXED : AQS_JOINT_REVOLUTE, i - 1, i, i ? 1.0 : 0.0, 0, 0, 0, 0, 1);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
+    {
+        double g[3] = {0, -9.81, 0};
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    }
+    for (i = 0; i < 5; i++) assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    assert_null(L->t.data); /* exact steps by the articulated-body algorithm only */
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qdd0, (size_t)nv), AQS_OK);
+    /* the next allocation fails: the DCA cannot be chosen, nothing changes */
+    before = cs.count;
+    cs.fail_at = cs.count + 1;
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_ENOMEM);
+    test_assert_contains(aqs_linkage_last_error(L), "out of memory");
+    assert_true(cs.count == before + 1);
+    cs.fail_at = 0;
+    assert_int_equal(aqs_linkage_get_exact_solver(L, &solver), AQS_OK);
+    assert_int_equal(solver, AQS_EXACT_ABA);
+    assert_null(L->t.data);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qdd1, (size_t)nv), AQS_OK);
+    assert_true(memcmp(qdd0, qdd1, sizeof(double) * (size_t)nv) == 0);
+    /* a tolerance allocates them, like the DCA */
+    cs.fail_at = cs.count + 1;
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-3), AQS_ENOMEM);
+    cs.fail_at = 0;
+    assert_null(L->t.data);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_non_null(L->t.data);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qdd1, (size_t)nv), AQS_OK);
+    assert_true(test_rel_diff(qdd1, qdd0, (size_t)nv) <= 1e-13);
+    before = cs.allocs;
+    for (i = 0; i < 5; i++) assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    assert_true(cs.allocs == before); /* steps allocate nothing */
+    aqs_linkage_destroy(L);
+    assert_int_equal(cs.live, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -267,6 +324,7 @@ int main(void)
         cmocka_unit_test(test_pendulum_closed_form),
         cmocka_unit_test(test_stale_tree_recomputed),
         cmocka_unit_test(test_exact_solver_errors),
+        cmocka_unit_test(test_dca_coefficients_on_demand),
     };
     return cmocka_run_group_tests_name("aba", tests, NULL, NULL);
 }
