@@ -7,6 +7,13 @@ exported=$(nm -D --defined-only "$lib" | awk '$2 == "T" {print $3}' | sed 's/@.*
 expected=$(sort tests/symbols.txt)
 declared=$(grep -o '^AQS_API [^(]*(' include/aqs.h | sed 's/($//; s/.*[ *]//' | sort)
 fail=0
+# Anything else the library defines dynamically (data, weak, versioned
+# objects) apart from the version-script node itself is an export too.
+others=$(nm -D --defined-only "$lib" | awk '$2 != "T" && $3 !~ /^AQS_[0-9]/ {print $3}')
+if [ -n "$others" ]; then
+    echo "check_symbols: non-function symbols exported: $others"
+    fail=1
+fi
 if [ "$exported" != "$expected" ]; then
     echo "check_symbols: exported symbols differ from tests/symbols.txt:"
     diff <(echo "$expected") <(echo "$exported") || true
