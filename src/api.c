@@ -429,9 +429,11 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
     update_all_poses(L);
     update_mark_all(L);
-    /* The DCA coefficients only when the DCA is the exact solver (tolerances
-     * and caps are set after finalize and allocate them then). */
-    if (L->exact_solver == AQS_EXACT_DCA) {
+    /* The DCA coefficients only when the DCA is the exact solver, or when
+     * nothing can move (no tree node: the solve takes the DCA path, and its
+     * few bytes are allocated here rather than in a solve). Tolerances and
+     * caps are set after finalize and allocate them then. */
+    if (L->exact_solver == AQS_EXACT_DCA || L->t.nnodes == 0) {
         if ((st = dca_enable(L, fn)) != AQS_OK || (st = update_coefficients(L)) != AQS_OK) {
             free_solver(L);
             return st;
@@ -630,8 +632,7 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
         }
         L->exact_by_aba = 1;
     } else {
-        /* the setters that lead here allocate the DCA coefficients; a linkage
-         * that cannot move (no tree node) gets its few bytes here */
+        /* allocated already by finalize or by the setters that lead here */
         if ((st = dca_enable(L, fn)) != AQS_OK) return st;
         if ((st = update_coefficients(L)) != AQS_OK) return st;
         adaptive_solve(L);
