@@ -1,5 +1,7 @@
-/* narrowphase.h -- penetration of two placed convex shapes through libccd's
- * MPR, with guards that turn libccd's degenerate results into defined ones. */
+/* narrowphase.h -- penetration of two placed convex shapes: exact from the
+ * distance of the cores for pairs with a sphere or capsule, libccd's MPR
+ * otherwise, with guards that turn libccd's degenerate results into defined
+ * ones. */
 #ifndef AQS_NARROWPHASE_H
 #define AQS_NARROWPHASE_H
 
