@@ -368,7 +368,7 @@ static double simplex_closest(const double w[4][3], int n, double lambda[4])
     double best = INFINITY;
     int mask, i, j;
     for (mask = 1; mask < (1 << n); mask++) {
-        int idx[4], m = 0;
+        int idx[4] = {0, 0, 0, 0}, m = 0;
         double e[3][3], G[3][3], rhs[3], mu[3] = {0, 0, 0}, lam[4], v[3], det, d2;
         for (i = 0; i < n; i++)
             if (mask & (1 << i)) idx[m++] = i;
