@@ -124,8 +124,6 @@ static int mpr_contact(const placed_shape *a, const placed_shape *b, double *dep
  * MPR is left the deep case where the core itself touches a box, cylinder or
  * hull. */
 
-static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 static double clamp(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
 static int is_core(const shape_def *s) { return s->type == AQS_SHAPE_SPHERE || s->type == AQS_SHAPE_CAPSULE; }
@@ -148,7 +146,7 @@ static void perpendicular(const double u[3], double n[3])
     int k = fabs(u[0]) <= fabs(u[1]) ? (fabs(u[0]) <= fabs(u[2]) ? 0 : 2) : (fabs(u[1]) <= fabs(u[2]) ? 1 : 2);
     e[k] = 1.0;
     vec3_cross(u, e, n);
-    len = sqrt(dot3(n, n));
+    len = sqrt(vec3_dot(n, n));
     if (len > 0.0) {
         n[0] /= len;
         n[1] /= len;
@@ -172,19 +170,19 @@ static void segment_segment(const double a0[3], const double a1[3], const double
         d2[i] = b1[i] - b0[i];
         r[i] = a0[i] - b0[i];
     }
-    a = dot3(d1, d1);
-    e = dot3(d2, d2);
-    f = dot3(d2, r);
+    a = vec3_dot(d1, d1);
+    e = vec3_dot(d2, d2);
+    f = vec3_dot(d2, r);
     if (a <= 0.0 && e <= 0.0) {
         s = t = 0.0;
     } else if (a <= 0.0) {
         t = clamp(f / e, 0.0, 1.0);
     } else {
-        c = dot3(d1, r);
+        c = vec3_dot(d1, r);
         if (e <= 0.0) {
             s = clamp(-c / a, 0.0, 1.0);
         } else {
-            b = dot3(d1, d2);
+            b = vec3_dot(d1, d2);
             denom = a * e - b * b;
             s = denom > 0.0 ? clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
             t = (b * s + f) / e;
@@ -218,7 +216,7 @@ static int core_core(const placed_shape *a, const placed_shape *b, double *depth
     core_world(b, b0, b1);
     segment_segment(a0, a1, b0, b1, qa, qb);
     for (i = 0; i < 3; i++) v[i] = qb[i] - qa[i];
-    d = sqrt(dot3(v, v));
+    d = sqrt(vec3_dot(v, v));
     if (!(d < R)) return 0; /* touching or apart */
     *depth = R - d;
     if (d > 1e-9 * R) {
@@ -229,21 +227,21 @@ static int core_core(const placed_shape *a, const placed_shape *b, double *depth
             ub[i] = b1[i] - b0[i];
         }
         vec3_cross(ua, ub, w);
-        if (sqrt(dot3(w, w)) > 1e-9 * sqrt(dot3(ua, ua) * dot3(ub, ub))) {
-            d = sqrt(dot3(w, w));
+        if (sqrt(vec3_dot(w, w)) > 1e-9 * sqrt(vec3_dot(ua, ua) * vec3_dot(ub, ub))) {
+            d = sqrt(vec3_dot(w, w));
             for (i = 0; i < 3; i++) normal[i] = w[i] / d;
         } else {
             double cab[3], u[3];
             for (i = 0; i < 3; i++) {
                 cab[i] = b->world.p[i] - a->world.p[i];
-                u[i] = dot3(ua, ua) >= dot3(ub, ub) ? ua[i] : ub[i];
+                u[i] = vec3_dot(ua, ua) >= vec3_dot(ub, ub) ? ua[i] : ub[i];
             }
             /* parallel cores or points: the centre line if it is off the cores' line */
-            if (dot3(u, u) > 0.0) {
-                double k = dot3(cab, u) / dot3(u, u);
+            if (vec3_dot(u, u) > 0.0) {
+                double k = vec3_dot(cab, u) / vec3_dot(u, u);
                 for (i = 0; i < 3; i++) cab[i] -= k * u[i];
             }
-            d = sqrt(dot3(cab, cab));
+            d = sqrt(vec3_dot(cab, cab));
             if (d > 1e-9 * R) {
                 for (i = 0; i < 3; i++) normal[i] = cab[i] / d;
             } else {
@@ -251,8 +249,8 @@ static int core_core(const placed_shape *a, const placed_shape *b, double *depth
             }
         }
         /* moving b along +normal or -normal separates equally: point from a to b */
-        if (dot3(normal, v) < 0.0 ||
-            (dot3(normal, v) == 0.0 && dot3(normal, b->world.p) < dot3(normal, a->world.p)))
+        if (vec3_dot(normal, v) < 0.0 ||
+            (vec3_dot(normal, v) == 0.0 && vec3_dot(normal, b->world.p) < vec3_dot(normal, a->world.p)))
             for (i = 0; i < 3; i++) normal[i] = -normal[i];
         d = 0.0;
     }
@@ -331,7 +329,7 @@ static void segment_solid(const shape_def *s, const double e0[3], const double e
         for (i = 0; i < 3; i++) x[i] = e0[i] + t * u[i];
         project_solid(s, x, y);
         for (i = 0; i < 3; i++) v[i] = x[i] - y[i];
-        if (it == 0 ? dot3(v, u) >= 0.0 : dot3(v, u) <= 0.0) return;
+        if (it == 0 ? vec3_dot(v, u) >= 0.0 : vec3_dot(v, u) <= 0.0) return;
     }
     for (it = 0; it < 80; it++) {
         t = 0.5 * (lo + hi);
@@ -339,7 +337,7 @@ static void segment_solid(const shape_def *s, const double e0[3], const double e
         for (i = 0; i < 3; i++) x[i] = e0[i] + t * u[i];
         project_solid(s, x, y);
         for (i = 0; i < 3; i++) v[i] = x[i] - y[i];
-        if (dot3(v, u) < 0.0) lo = t;
+        if (vec3_dot(v, u) < 0.0) lo = t;
         else hi = t;
     }
     /* the better of the two ends of the last bracket */
@@ -352,7 +350,7 @@ static void segment_solid(const shape_def *s, const double e0[3], const double e
     project_solid(s, x, y);
     {
         double w[3] = {x[0] - y[0], x[1] - y[1], x[2] - y[2]};
-        if (dot3(v, v) < dot3(w, w))
+        if (vec3_dot(v, v) < vec3_dot(w, w))
             for (i = 0; i < 3; i++) {
                 x[i] = xl[i];
                 y[i] = yl[i];
@@ -375,8 +373,8 @@ static double simplex_closest(const double w[4][3], int n, double lambda[4])
         for (j = 1; j < m; j++)
             for (i = 0; i < 3; i++) e[j - 1][i] = w[idx[j]][i] - w[idx[0]][i];
         for (i = 0; i < m - 1; i++) {
-            rhs[i] = -dot3(e[i], w[idx[0]]);
-            for (j = 0; j < m - 1; j++) G[i][j] = dot3(e[i], e[j]);
+            rhs[i] = -vec3_dot(e[i], w[idx[0]]);
+            for (j = 0; j < m - 1; j++) G[i][j] = vec3_dot(e[i], e[j]);
         }
         if (m == 2) {
             if (!(G[0][0] > 0.0)) continue;
@@ -417,7 +415,7 @@ static double simplex_closest(const double w[4][3], int n, double lambda[4])
             v[i] = w[idx[0]][i];
             for (j = 1; j < m; j++) v[i] += mu[j - 1] * e[j - 1][i];
         }
-        d2 = dot3(v, v);
+        d2 = vec3_dot(v, v);
         if (d2 < best) {
             best = d2;
             for (j = 0; j < 4; j++) lambda[j] = 0.0;
@@ -443,12 +441,12 @@ static void segment_hull(const shape_def *s, const double e0[3], const double e1
         for (i = 0; i < 3; i++) v[i] = 0.0;
         for (j = 0; j < n; j++)
             for (i = 0; i < 3; i++) v[i] += lambda[j] * w[j][i];
-        d2 = dot3(v, v);
+        d2 = vec3_dot(v, v);
         if (!(d2 > 0.0) || !(d2 < prev)) break; /* touching, or no progress */
         prev = d2;
         /* support of the difference in -v: the segment's end against the hull's farthest point along v */
         for (i = 0; i < 3; i++) {
-            sx[i] = dot3(e0, v) <= dot3(e1, v) ? e0[i] : e1[i];
+            sx[i] = vec3_dot(e0, v) <= vec3_dot(e1, v) ? e0[i] : e1[i];
             dir[i] = v[i];
         }
         shape_support(s, dir, sy);
@@ -458,7 +456,7 @@ static void segment_hull(const shape_def *s, const double e0[3], const double e1
             wy[n][i] = sy[i];
         }
         /* stop when the new point does not get closer to the origin than v's plane (to rounding) */
-        if (d2 - dot3(v, w[n]) <= 1e-15 * d2) break;
+        if (d2 - vec3_dot(v, w[n]) <= 1e-15 * d2) break;
         n++;
         simplex_closest(w, n, lambda);
         /* keep the face that holds the closest point */
@@ -507,7 +505,7 @@ static int core_solid(const placed_shape *o, const placed_shape *c, double *dept
         segment_solid(o->s, e0, e1, x, y);
     }
     for (i = 0; i < 3; i++) v[i] = x[i] - y[i];
-    d = sqrt(dot3(v, v));
+    d = sqrt(vec3_dot(v, v));
     if (!(d < r)) return 0; /* touching or apart */
     if (d > 1e-9 * r) {
         *depth = r - d;
