@@ -22,6 +22,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "adaptive.h"
 #include "dca.h"
 #include "dense.h"
 #include "update.h"
@@ -259,23 +260,12 @@ static void welded_forces(aqs_linkage *L)
 
 aqs_status aba_solve(aqs_linkage *L)
 {
-    solve_state *s = &L->s;
     aqs_status st;
     update_loads(L); /* the composites' loads in their frames */
     if ((st = backward(L)) != AQS_OK) return st;
     forward(L);
     welded_forces(L);
-    s->nprocessed = 0;
-    s->nreached = 0;
-    s->computed = 0;
-    s->all = 1;
-    s->tracked = 1;
-    s->bound = 0.0;
-    s->a_root = 0.0;
-    s->lower = 0.0;
-    s->sum = 0.0;
-    s->capped = 0;
-    s->valid = 1;
+    adaptive_mark_exact(L);
     L->t.nodes_updated = 0;
     return AQS_OK;
 }

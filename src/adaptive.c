@@ -186,6 +186,25 @@ static void run(aqs_linkage *L, heap *h, double eps)
     s->heap_size = h->size;
 }
 
+/* A solve that computed every joint: no bound, nothing queued. */
+static void finish_exact(solve_state *s)
+{
+    s->all = 1;
+    s->bound = 0.0;
+    s->a_root = 0.0;
+    s->valid = 1;
+}
+
+void adaptive_mark_exact(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    s->nprocessed = s->nreached = s->computed = 0;
+    s->tracked = 1;
+    s->lower = s->sum = 0.0;
+    s->capped = 0;
+    finish_exact(s);
+}
+
 void adaptive_solve(aqs_linkage *L)
 {
     solve_state *s = &L->s;
@@ -197,22 +216,16 @@ void adaptive_solve(aqs_linkage *L)
     s->sum = 0.0;
     s->valid = 0;
     if (t->nnodes == 0) { /* nothing moves */
-        s->all = 1;
-        s->bound = 0.0;
-        s->a_root = 0.0;
         if (L->m.comp_welded[L->m.ncomp])
             dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
-        s->valid = 1;
+        finish_exact(s);
         return;
     }
     if (s->eps == 0.0 && s->max_computed == 0) {
         /* Exact: every node, parents before children (descending index). */
         for (n = t->nnodes - 1; n >= 0; n--)
             if (t->nodes[n].joint >= 0) process(L, n, kids);
-        s->all = 1;
-        s->bound = 0.0;
-        s->a_root = 0.0;
-        s->valid = 1;
+        finish_exact(s);
         return;
     }
     {

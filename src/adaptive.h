@@ -11,6 +11,9 @@ void adaptive_free(aqs_linkage *L);
 /* Back-substitute with the current tolerance (exact when eps = 0 and no
  * cap), after the coefficients are up to date. Sets L->s. */
 void adaptive_solve(aqs_linkage *L);
+/* Set L->s as after a solve that computed every joint outside this file
+ * (the articulated-body solver): no bound, no processed or queued node. */
+void adaptive_mark_exact(aqs_linkage *L);
 /* Continue the last adaptive solve down to a smaller eps. */
 void adaptive_refine(aqs_linkage *L, double eps);
 /* q <- q (+) h qdd for the computed joints; refresh the moved nodes' frames

@@ -40,6 +40,22 @@ static void make(shape_def *s, int32_t type, double a, double b, double c)
     shape_bound(s);
 }
 
+/* The box of half-extents (hx, hy, hz) as the hull of its 8 corners (pts: 24 doubles). */
+static void box_hull(shape_def *hull, double *pts, double hx, double hy, double hz)
+{
+    int i;
+    for (i = 0; i < 8; i++) {
+        pts[3 * i] = i & 1 ? hx : -hx;
+        pts[3 * i + 1] = i & 2 ? hy : -hy;
+        pts[3 * i + 2] = i & 4 ? hz : -hz;
+    }
+    memset(hull, 0, sizeof *hull);
+    hull->type = AQS_SHAPE_HULL;
+    hull->pts = pts;
+    hull->npts = 8;
+    shape_bound(hull);
+}
+
 /* A rigid motion of the whole pair: world = M * local. */
 typedef struct {
     double R[9], p[3];
@@ -240,20 +256,11 @@ static void test_cylinder_and_hull(void **state)
     placed_shape a, b, h, c;
     motion M;
     double pts[24];
-    int k, i;
+    int k;
     make(&cy, AQS_SHAPE_CYLINDER, 1.0, 2.0, 0);
     make(&sp, AQS_SHAPE_SPHERE, 0.5, 0, 0);
     make(&box, AQS_SHAPE_BOX, 0.5, 0.7, 0.9);
-    for (i = 0; i < 8; i++) { /* the same box as a hull of its corners */
-        pts[3 * i] = (i & 1 ? 0.5 : -0.5);
-        pts[3 * i + 1] = (i & 2 ? 0.7 : -0.7);
-        pts[3 * i + 2] = (i & 4 ? 0.9 : -0.9);
-    }
-    memset(&hull, 0, sizeof hull);
-    hull.type = AQS_SHAPE_HULL;
-    hull.pts = pts;
-    hull.npts = 8;
-    shape_bound(&hull);
+    box_hull(&hull, pts, 0.5, 0.7, 0.9); /* the box as a hull of its corners */
     assert_true(fabs(hull.radius - box.radius) < 1e-15);
     for (k = 0; k < 50; k++) {
         double delta = test_uniform(&st, 1e-6, 0.4), depth, n1[3], n2[3], p1[3], p2[3], d2;
@@ -400,22 +407,13 @@ static void test_separated_1e12_rotated(void **state)
     placed_shape a, b;
     motion M;
     double Rx[9], pts[24];
-    int k, i;
+    int k;
     make(&bx, AQS_SHAPE_BOX, 1.0, 2.0, 3.0);
     make(&sp, AQS_SHAPE_SPHERE, 0.5, 0, 0);
     make(&c1, AQS_SHAPE_CAPSULE, 0.3, 1.0, 0); /* segment z in [-1, 1] */
     make(&c2, AQS_SHAPE_CAPSULE, 0.2, 2.0, 0); /* segment z in [-2, 2] */
     make(&cy, AQS_SHAPE_CYLINDER, 1.0, 2.0, 0);
-    for (i = 0; i < 8; i++) { /* the box bx as a hull of its corners */
-        pts[3 * i] = (i & 1 ? 1.0 : -1.0);
-        pts[3 * i + 1] = (i & 2 ? 2.0 : -2.0);
-        pts[3 * i + 2] = (i & 4 ? 3.0 : -3.0);
-    }
-    memset(&hull, 0, sizeof hull);
-    hull.type = AQS_SHAPE_HULL;
-    hull.pts = pts;
-    hull.npts = 8;
-    shape_bound(&hull);
+    box_hull(&hull, pts, 1.0, 2.0, 3.0); /* the box as a hull of its corners */
     test_rodrigues(xaxis, 0.5 * PI, Rx); /* c2 along y */
     for (k = 0; k < 200; k++) {
         double th = test_uniform(&st, 0.1, PI - 0.1), phi = test_uniform(&st, 0.0, 0.8), d = 0.5 + g;
@@ -498,22 +496,13 @@ static void test_shallow_rotated(void **state)
     placed_shape a, b;
     motion M;
     double pts[24];
-    int k, i, f;
+    int k, f;
     make(&bx, AQS_SHAPE_BOX, 1.0, 2.0, 3.0);
     make(&sp, AQS_SHAPE_SPHERE, 0.5, 0, 0);
     make(&c1, AQS_SHAPE_CAPSULE, 0.3, 1.0, 0);
     make(&c2, AQS_SHAPE_CAPSULE, 0.2, 2.0, 0);
     make(&cy, AQS_SHAPE_CYLINDER, 1.0, 2.0, 0);
-    for (i = 0; i < 8; i++) {
-        pts[3 * i] = (i & 1 ? 1.0 : -1.0);
-        pts[3 * i + 1] = (i & 2 ? 2.0 : -2.0);
-        pts[3 * i + 2] = (i & 4 ? 3.0 : -3.0);
-    }
-    memset(&hull, 0, sizeof hull);
-    hull.type = AQS_SHAPE_HULL;
-    hull.pts = pts;
-    hull.npts = 8;
-    shape_bound(&hull);
+    box_hull(&hull, pts, 1.0, 2.0, 3.0); /* the box as a hull of its corners */
     for (k = 0; k < 200; k++) {
         random_motion(&st, &M, 10.0);
         for (f = 0; f < 3; f++) {
