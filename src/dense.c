@@ -310,3 +310,63 @@ int dense_qr_r_colmajor(double *A, int m, int n)
     }
     return r;
 }
+
+int dense_qr_append(double *R, int n, int *present, double *D, int p)
+{
+    int j, i, c, s = 0, rows = 0;
+    for (j = 0; j < n; j++) {
+        double *a, *rj = R + (long)j * n, norm = 0.0, alpha, v0, vnorm2, scale = 0.0, top;
+        int q = p - s; /* D's live rows are s .. p - 1 */
+        if (q == 0) { /* nothing of D left: the rest of R stands */
+            for (; j < n; j++) rows += present[j] != 0;
+            return rows;
+        }
+        a = D + (long)j * p + s;
+        for (i = 0; i < q; i++)
+            if (fabs(a[i]) > scale) scale = fabs(a[i]);
+        if (scale == 0.0) { /* nothing of D in this column */
+            rows += present[j] != 0;
+            continue;
+        }
+        /* the pivot: R's row j if present, else D's first live row */
+        top = present[j] ? rj[j] : a[0];
+        if (fabs(top) > scale) scale = fabs(top);
+        {
+            const double inv = 1.0 / scale; /* scaled: no overflow or underflow */
+            for (i = present[j] ? 0 : 1; i < q; i++) norm += (a[i] * inv) * (a[i] * inv);
+            norm += (top * inv) * (top * inv);
+        }
+        norm = scale * sqrt(norm);
+        alpha = top > 0 ? -norm : norm;
+        v0 = top - alpha; /* v = [top - alpha; the rest of the column]: |v0| >= norm > 0 */
+        if (present[j]) {
+            vnorm2 = v0 * v0;
+            for (i = 0; i < q; i++) vnorm2 += a[i] * a[i];
+            for (c = j + 1; c < n; c++) {
+                double *b = D + (long)c * p + s, sum = v0 * rj[c];
+                for (i = 0; i < q; i++) sum += a[i] * b[i];
+                sum = 2.0 * sum / vnorm2;
+                rj[c] -= sum * v0;
+                for (i = 0; i < q; i++) b[i] -= sum * a[i];
+            }
+        } else {
+            /* D's row s becomes R's row j */
+            vnorm2 = v0 * v0;
+            for (i = 1; i < q; i++) vnorm2 += a[i] * a[i];
+            for (c = j + 1; c < n; c++) {
+                double *b = D + (long)c * p + s, sum = v0 * b[0];
+                for (i = 1; i < q; i++) sum += a[i] * b[i];
+                sum = 2.0 * sum / vnorm2;
+                b[0] -= sum * v0;
+                for (i = 1; i < q; i++) b[i] -= sum * a[i];
+                rj[c] = b[0];
+            }
+            for (c = 0; c < j; c++) rj[c] = 0.0;
+            present[j] = 1;
+            s++;
+        }
+        rj[j] = alpha;
+        rows++;
+    }
+    return rows;
+}

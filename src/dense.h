@@ -88,5 +88,15 @@ int dense_qr_r(double *A, int m, int n);
  * reflections sweep are contiguous. R is left in the first min(m, n) rows
  * (upper part of each column); entries below the diagonal are zeroed. */
 int dense_qr_r_colmajor(double *A, int m, int n);
+/* QR update by rows. R (n x n, row-major) holds rows at the positions j
+ * with present[j] != 0, each zero left of column j (an upper-triangular
+ * matrix with rows missing); D is p x n column-major (column j at D + j p).
+ * On return R holds the R factor of [R; D] in the same form, so that the sum
+ * of r_j r_j^T over the present rows grows by D^T D: a reflection over R's
+ * row j (if present) and D's live rows zeroes D's column j; where row j is
+ * missing and D's column is not zero, D's first live row becomes R's row j
+ * (present[j] set) and leaves D. D is destroyed. Returns the present rows.
+ * About 2 p n^2 flops, against 2 (n + p) n^2 for the stacked matrix. */
+int dense_qr_append(double *R, int n, int *present, double *D, int p);
 
 #endif

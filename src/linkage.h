@@ -36,6 +36,7 @@ typedef struct {
     int64_t W;            /* Cholesky factor C of T = V^{-1} (6x6 lower); W = V - V S U */
     int64_t U, VS, rho, gamma, S; /* §3.4: U (d x 6), V S (6 x d), rho (d), gamma (6), S (6 x d) */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
+    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
@@ -60,6 +61,10 @@ typedef struct {
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
     double *tdata;
     double *tscratch; /* the stacked matrix of one node */
+    int32_t *tperm;   /* per node (at its handles offset): T's column blocks as handle
+                         indices, in the order the ancestors join them (src/totalacc.c) */
+    int32_t *trowpos; /* per node (at its tpos, 6nh + 1 entries): the first column of each row of T */
+    int32_t *tiscratch; /* 9 max_handles + 4 */
     /* Lazy update: nodes whose coefficients are stale (top-closed set). */
     uint32_t *stamp;
     uint32_t epoch;

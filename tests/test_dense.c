@@ -345,6 +345,83 @@ static void test_spd_inverse_failures(void **state)
     }
 }
 
+/* Gram matrix G = sum over the present rows of R (n x n row-major) of r r^T,
+ * plus D^T D for the p x n column-major D. */
+static void gram(const double *R, const int *present, int n, const double *D, int p, double *G)
+{
+    int i, j, r;
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++) {
+            double s = 0;
+            for (r = 0; r < n; r++)
+                if (!present || present[r]) s += R[r * n + i] * R[r * n + j];
+            for (r = 0; r < p; r++) s += D[i * p + r] * D[j * p + r];
+            G[i * n + j] = s;
+        }
+}
+
+/* dense_qr_append and dense_qr_r_colmajor: the Gram matrix (what
+ * ||T z||^2 evaluates) is kept to rounding, R stays upper triangular with
+ * its rows where present says, and the row counts are right: on random
+ * sizes, random present patterns, and D of full and deficient rank. */
+static void test_qr_append(void **state)
+{
+    uint64_t s = 77;
+    int trial;
+    (void)state;
+    for (trial = 0; trial < 400; trial++) {
+        int n = 1 + (int)test_uniform(&s, 0, 19.99), p = (int)test_uniform(&s, 0, 9.99), i, j, rows, np = 0;
+        int present[20], copy[20];
+        double R[400], R0[400], D[200], D0[200], G0[400], G1[400], S[600], scale = 0;
+        for (j = 0; j < n; j++) present[j] = trial % 3 != 0 && test_uniform(&s, 0, 1) < 0.6;
+        fill(&s, R, n * n);
+        for (j = 0; j < n; j++)
+            for (i = 0; i < n; i++)
+                if (!present[j] || i < j) R[j * n + i] = 0.0;
+        fill(&s, D, p * n);
+        if (trial % 4 == 3 && p > 1) /* rank deficient: the last row of D copies the first */
+            for (j = 0; j < n; j++) D[j * p + p - 1] = D[j * p];
+        memcpy(R0, R, sizeof R);
+        memcpy(D0, D, sizeof D);
+        memcpy(copy, present, sizeof present);
+        for (j = 0; j < n; j++) np += present[j];
+        gram(R0, present, n, D0, p, G0);
+        rows = dense_qr_append(R, n, present, D, p);
+        gram(R, present, n, NULL, 0, G1);
+        for (i = 0; i < n * n; i++) scale = fmax(scale, fabs(G0[i]));
+        for (i = 0; i < n * n; i++) assert_true(fabs(G1[i] - G0[i]) <= 1e-13 * (scale + 1));
+        for (j = 0, i = 0; j < n; j++) i += present[j];
+        assert_int_equal(rows, i);
+        assert_true(rows >= np && rows <= np + p && rows <= n);
+        for (j = 0; j < n; j++) {
+            int c;
+            if (copy[j]) assert_true(present[j]); /* rows never disappear */
+            if (present[j])
+                for (c = 0; c < j; c++) assert_true(R[j * n + c] == 0.0);
+        }
+        /* the dense QR of the stacked matrix [R0; D0] agrees in the Gram */
+        {
+            int m = np + p, k = 0, r, kept;
+            for (j = 0; j < n; j++) {
+                if (!copy[j]) continue;
+                for (i = 0; i < n; i++) S[i * m + k] = R0[j * n + i];
+                k++;
+            }
+            for (r = 0; r < p; r++, k++)
+                for (i = 0; i < n; i++) S[i * m + k] = D0[i * p + r];
+            if (m == 0) continue;
+            kept = dense_qr_r_colmajor(S, m, n);
+            assert_int_equal(kept, m < n ? m : n);
+            for (i = 0; i < n; i++)
+                for (j = 0; j < n; j++) {
+                    double g = 0;
+                    for (r = 0; r < kept; r++) g += (r <= i ? S[i * m + r] : 0) * (r <= j ? S[j * m + r] : 0);
+                    assert_true(fabs(g - G0[i * n + j]) <= 1e-13 * (scale + 1));
+                }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -355,6 +432,7 @@ int main(void)
         cmocka_unit_test(test_spd_inverse_fallback_accuracy),
         cmocka_unit_test(test_spd_inverse_fallback_ill_conditioned),
         cmocka_unit_test(test_spd_inverse_failures),
+        cmocka_unit_test(test_qr_append),
     };
     return cmocka_run_group_tests_name("dense", tests, NULL, NULL);
 }

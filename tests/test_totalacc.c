@@ -78,8 +78,13 @@ static void test_lemma1_square_root_form(void **state)
             assert_true(rel < 1e-9);
             assert_true(a >= 0.0);
             assert_true(nd->trows <= cols);
-            for (r = 0; r < nd->trows; r++)
-                for (j = 0; j < r && j < cols; j++) assert_true(L->t.tdata[nd->T + (int64_t)r * cols + j] == 0.0);
+            /* upper triangular with rows missing: row r starts at column
+             * pos[r] >= r, strictly increasing, zeros left of it */
+            for (r = 0; r < nd->trows; r++) {
+                const int32_t *pos = L->t.trowpos + nd->tpos;
+                assert_true(pos[r] >= r && pos[r] < cols && (r == 0 || pos[r] > pos[r - 1]));
+                for (j = 0; j < pos[r]; j++) assert_true(L->t.tdata[nd->T + (int64_t)r * cols + j] == 0.0);
+            }
         }
         aqs_linkage_destroy(L);
     }
