@@ -19,7 +19,9 @@
  * same ancestors order both), so they stay rows of an upper-triangular
  * matrix. Only the child rows starting in block k (at most 6 per child) and
  * K (d rows) are reflected (dense_qr_append), instead of all the rows of
- * the stacked matrix. */
+ * the stacked matrix. Rows are stored packed: row r holds its columns
+ * trowpos[r] .. 6nh, right after row r - 1 (at most (6nh+1)(6nh+2)/2
+ * doubles per node instead of (6nh+1)^2). */
 #include "totalacc.h"
 
 #include <math.h>
@@ -64,13 +66,14 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
         nd->T = size;
         nd->tpos = npos;
         if (nd->joint >= 0) {
-            size += cols * cols;
+            size += cols * (cols + 1) / 2;
             npos += cols;
         }
     }
     tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
-    /* the stacked matrix, column-major: up to 2 cmax + 6 rows */
-    scratch = lk_calloc(L, (size_t)(2 * cmax + 6) * (size_t)cmax, sizeof(double));
+    /* the reflected rows (column-major, at most 6 + 6 + 6) and the node's
+     * factor unpacked (cmax x cmax) */
+    scratch = lk_calloc(L, (size_t)(cmax + 18) * (size_t)cmax, sizeof(double));
     perm = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(int32_t));
     /* posC, mapA, mapB (nh each) and the present rows (cols) */
     iscratch = lk_calloc(L, 3 * (size_t)t->max_handles + (size_t)cmax + 3, sizeof(int32_t));
@@ -129,19 +132,20 @@ static void add_gF(const double *W, const double *g, const double *M, const doub
     D[(int64_t)6 * nh * ld + r] += s;
 }
 
-/* Copy row tr of a child's factor (cols_x columns in the child's order),
- * without its joined first block, to C's columns: block p >= 1 goes to
- * block map[p], the constant to C's last column. dst + col * stride is
- * C's column col: stride 1 for a row of T_C, ld for a row of D. */
-static void copy_child_row(const double *tr, int32_t nh_x, const int32_t *map, int32_t cols,
+/* Copy a packed row of a child's factor (its columns q .. 6 nh_x, in the
+ * child's order), without its joined first block, to C's columns: block
+ * p >= 1 goes to block map[p], the constant to C's last column. dst + col *
+ * stride is C's column col (stride 1 for a row of R, ld for a row of D),
+ * zero beforehand where the row is zero. */
+static void copy_child_row(const double *tr, int32_t q, int32_t nh_x, const int32_t *map, int32_t cols,
                            double *dst, int64_t stride)
 {
     int32_t p, i;
-    for (p = 1; p < nh_x; p++) {
+    for (p = q / 6 > 1 ? q / 6 : 1, i = p == q / 6 ? q % 6 : 0; p < nh_x; p++, i = 0) {
         double *d = dst + (int64_t)6 * map[p] * stride;
-        for (i = 0; i < 6; i++) d[i * stride] = tr[6 * p + i];
+        for (; i < 6; i++) d[i * stride] = tr[6 * p + i - q];
     }
-    dst[(int64_t)(cols - 1) * stride] += tr[6 * nh_x];
+    dst[(int64_t)(cols - 1) * stride] += tr[6 * nh_x - q];
 }
 
 /* map[p] for the blocks of child x (handle k joined; its outer handles are
@@ -170,27 +174,47 @@ static int32_t reflected_rows(const tree *t, int32_t x)
     return r;
 }
 
-/* Place the rows of child x's factor from row `from` on in T (C's cols x
- * cols rows, row j starting at column j): a row starting at the child's
- * column q goes to C's row for q (map). The constant-only rows of the two
- * children (q = 6 nh_x) share C's last row. */
-static void place_rows(const tree *t, int32_t x, int32_t from, const int32_t *map, int32_t cols,
-                       double *T, int32_t *present)
+/* Row r of node x's packed factor (at packed offset off) into full (cols_x
+ * entries, zeros left of its start); returns the offset of row r + 1. */
+static int64_t unpack_row(const tree *t, int32_t x, int32_t r, int64_t off, double *full)
+{
+    const int32_t *pos = row_starts(t, x);
+    int32_t cx = 6 * t->nodes[x].nh + 1, len = cx - pos[r];
+    memset(full, 0, sizeof(double) * (size_t)pos[r]);
+    memcpy(full + pos[r], t->tdata + t->nodes[x].T + off, sizeof(double) * (size_t)len);
+    return off + len;
+}
+
+/* Place the rows of child x's factor from row `from` (at packed offset off)
+ * on in R (C's cols x cols rows, row j starting at column j): a row starting
+ * at the child's column q goes to C's row for q (map). The constant-only rows
+ * of the two children (q = 6 nh_x) share C's last row. */
+static void place_rows(const tree *t, int32_t x, int32_t from, int64_t off, const int32_t *map,
+                       int32_t cols, double *R, int32_t *present)
 {
     const node *X = &t->nodes[x];
     const int32_t *pos = row_starts(t, x);
     int32_t r, cx = 6 * X->nh + 1;
     for (r = from; r < X->trows; r++) {
-        const double *tr = t->tdata + X->T + (int64_t)r * cx;
+        const double *tr = t->tdata + X->T + off;
         int32_t q = pos[r], j = q < 6 * X->nh ? 6 * map[q / 6] + q % 6 : cols - 1;
-        double *last = T + (int64_t)cols * cols - 1;
+        double *last = R + (int64_t)cols * cols - 1;
         if (j == cols - 1 && present[j]) {
-            *last = hypot(*last, tr[cx - 1]);
+            *last = hypot(*last, tr[cx - 1 - q]);
         } else {
-            copy_child_row(tr, X->nh, map, cols, T + (int64_t)j * cols, 1);
+            copy_child_row(tr, q, X->nh, map, cols, R + (int64_t)j * cols, 1);
             present[j] = 1;
         }
+        off += cx - q;
     }
+}
+
+/* The joined block (the first 6 columns) of a packed child row starting at
+ * column q < 6. */
+static void joined_block(const double *tr, int32_t q, double k[6])
+{
+    int32_t i;
+    for (i = 0; i < 6; i++) k[i] = i < q ? 0.0 : tr[i - q];
 }
 
 void totalacc_node_update(aqs_linkage *L, int32_t n)
@@ -211,7 +235,10 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     int32_t *posC = t->tiscratch, *mapA = posC + nh, *mapB = mapA + A->nh, *present = mapB + B->nh;
     int32_t *rowpos = t->trowpos + C->tpos;
     double *D = t->tscratch; /* the reflected rows, column-major, leading dimension p */
+    double *R = D + (int64_t)18 * (6 * t->max_handles + 1); /* C's factor, unpacked */
     double *T = t->tdata + C->T;
+    const int32_t *posA = row_starts(t, C->a), *posB = row_starts(t, C->b);
+    int64_t offA = 0, offB = 0, off;
     double W[36];
 
     C->trows = 0;
@@ -220,25 +247,30 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     child_map(t, A, C->ka, 0, posC, mapA);
     child_map(t, B, C->kb, nAo, posC, mapB);
     memset(D, 0, sizeof(double) * (size_t)p * (size_t)cols);
-    memset(T, 0, sizeof(double) * (size_t)cols * (size_t)cols);
+    memset(R, 0, sizeof(double) * (size_t)cols * (size_t)cols);
     memset(present, 0, sizeof(int32_t) * (size_t)cols);
     if (da + db > 0) dca_form_W(L, n, W); /* once for all the rows: each row needs W g */
 
     /* T_A E_A: -(T_A)_k X^T F added to the rows starting in block k (the row
      * g^T = (T_A)_k X^T is X applied to (T_A)_k); the others are copied. */
     for (r = 0; r < da; r++, row++) {
-        const double *tr = t->tdata + A->T + (int64_t)r * (6 * A->nh + 1);
-        double g[6];
-        copy_child_row(tr, A->nh, mapA, cols, D + row, p);
-        spatial_xform_motion(J, tr, g);
+        const double *tr = t->tdata + A->T + offA;
+        double g[6], k[6];
+        copy_child_row(tr, posA[r], A->nh, mapA, cols, D + row, p);
+        joined_block(tr, posA[r], k);
+        offA += 6 * A->nh + 1 - posA[r];
+        spatial_xform_motion(J, k, g);
         for (i = 0; i < 6; i++) g[i] = -g[i];
         add_gF(W, g, M, gamma, posC, nh, D, p, row);
     }
     /* T_B E_B */
     for (r = 0; r < db; r++, row++) {
-        const double *tr = t->tdata + B->T + (int64_t)r * (6 * B->nh + 1);
-        copy_child_row(tr, B->nh, mapB, cols, D + row, p);
-        add_gF(W, tr, M, gamma, posC, nh, D, p, row);
+        const double *tr = t->tdata + B->T + offB;
+        double k[6];
+        copy_child_row(tr, posB[r], B->nh, mapB, cols, D + row, p);
+        joined_block(tr, posB[r], k);
+        offB += 6 * B->nh + 1 - posB[r];
+        add_gF(W, k, M, gamma, posC, nh, D, p, row);
     }
     /* K = [-U M^T, rho] */
     for (r = 0; r < kd; r++, row++) {
@@ -250,13 +282,14 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         }
         D[(int64_t)(cols - 1) * p + row] = rho[r];
     }
-    place_rows(t, C->a, da, mapA, cols, T, present);
-    place_rows(t, C->b, db, mapB, cols, T, present);
-    (void)dense_qr_append(T, cols, present, D, p);
-    /* keep the present rows, in order (row j moves up to r <= j) */
-    for (j = 0, r = 0; j < cols; j++) {
+    place_rows(t, C->a, da, offA, mapA, cols, R, present);
+    place_rows(t, C->b, db, offB, mapB, cols, R, present);
+    (void)dense_qr_append(R, cols, present, D, p);
+    /* keep the present rows, in order, packed */
+    for (j = 0, r = 0, off = 0; j < cols; j++) {
         if (!present[j]) continue;
-        if (r != j) memcpy(T + (int64_t)r * cols, T + (int64_t)j * cols, sizeof(double) * (size_t)cols);
+        memcpy(T + off, R + (int64_t)j * cols + j, sizeof(double) * (size_t)(cols - j));
+        off += cols - j;
         rowpos[r++] = j;
     }
     C->trows = r;
@@ -268,16 +301,41 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
     const node *nd = &t->nodes[n];
     const double *T = t->tdata + nd->T, *x = t->data + nd->xf;
     const int32_t *perm = t->tperm + nd->handles, *pos = row_starts(t, n);
-    int32_t cols = 6 * nd->nh + 1, r, p, i;
-    double sum = 0.0;
-    for (r = 0; r < nd->trows; r++) {
-        const double *row = T + (int64_t)r * cols;
-        double s = row[cols - 1];
-        for (p = pos[r] / 6; p < nd->nh; p++) {
-            const double *xp = x + 6 * perm[p], *rp = row + 6 * p;
-            for (i = 0; i < 6; i++) s += rp[i] * xp[i];
+    int32_t cols = 6 * nd->nh + 1, r, p, i, c;
+    double sum = 0.0, xs[6 * 8 + 1];
+    if (nd->nh <= 8) {
+        /* x in the factor's column order, 1 last: each row is one dot product */
+        for (p = 0; p < nd->nh; p++)
+            for (i = 0; i < 6; i++) xs[6 * p + i] = x[6 * perm[p] + i];
+        xs[cols - 1] = 1.0;
+        for (r = 0; r < nd->trows; r++) {
+            const int32_t c0 = pos[r], len = cols - c0;
+            const double *z = xs + c0;
+            double s = 0.0;
+            for (c = 0; c < len; c++) s += T[c] * z[c];
+            T += len;
+            sum += s * s;
         }
+        return sum;
+    }
+    for (r = 0; r < nd->trows; r++) {
+        /* the packed row holds columns pos[r] .. cols - 1: column c at T[c - pos[r]] */
+        int32_t c0 = pos[r];
+        double s = T[cols - 1 - c0];
+        for (p = c0 / 6, i = c0 % 6; p < nd->nh; p++, i = 0) {
+            const double *xp = x + 6 * perm[p];
+            for (; i < 6; i++) s += T[6 * p + i - c0] * xp[i];
+        }
+        T += cols - c0;
         sum += s * s;
     }
     return sum;
+}
+
+void totalacc_unpack(const aqs_linkage *L, int32_t n, double *full)
+{
+    const tree *t = &L->t;
+    int32_t cols = 6 * t->nodes[n].nh + 1, r;
+    int64_t off = 0;
+    for (r = 0; r < t->nodes[n].trows; r++) off = unpack_row(t, n, r, off, full + (int64_t)r * cols);
 }

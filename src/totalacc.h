@@ -1,5 +1,6 @@
 /* totalacc.h -- total-acceleration coefficients in square-root form
- * (MATH.md §4-5): A_C(x) = || T_C [x; 1] ||^2, T_C built by Householder QR. */
+ * (MATH.md §4-5): A_C(x) = || T_C [x; 1] ||^2, T_C built by Householder
+ * reflections (docs/math.md §9). */
 #ifndef AQS_TOTALACC_H
 #define AQS_TOTALACC_H
 
@@ -15,5 +16,9 @@ void totalacc_free(aqs_linkage *L);
 void totalacc_node_update(aqs_linkage *L, int32_t n);
 /* A(n) at the handle forces stored in the node (its x). */
 double totalacc_eval(const aqs_linkage *L, int32_t n);
+/* Node n's factor as trows full rows of 6nh + 1 columns (row-major, in the
+ * factor's column order: handle blocks tree.tperm, then the constant), for
+ * tests. */
+void totalacc_unpack(const aqs_linkage *L, int32_t n, double *full);
 
 #endif

@@ -664,13 +664,18 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
         memcpy(s->phi_b + k, t->data + nd->bv, sizeof(double) * (size_t)(6 * h));
         k += 6 * h;
         if (nd->joint < 0) continue;
-        for (i = 0; i < c; i++)
-            for (j = 0; j < c; j++) {
-                double sum = 0;
-                const double *T = t->tdata + nd->T;
-                for (r = 0; r < nd->trows; r++) sum += T[r * c + i] * T[r * c + j];
-                s->gram[g++] = sum;
-            }
+        {
+            double *T = malloc(sizeof(double) * (size_t)(c * c));
+            assert_non_null(T);
+            totalacc_unpack(L, n, T);
+            for (i = 0; i < c; i++)
+                for (j = 0; j < c; j++) {
+                    double sum = 0;
+                    for (r = 0; r < nd->trows; r++) sum += T[r * c + i] * T[r * c + j];
+                    s->gram[g++] = sum;
+                }
+            free(T);
+        }
     }
 }
 

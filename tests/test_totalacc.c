@@ -68,7 +68,10 @@ static void test_lemma1_square_root_form(void **state)
             const node *nd = &L->t.nodes[n];
             double a, ref, rel;
             int32_t r, cols = 6 * nd->nh + 1, j;
+            double *full;
             if (nd->joint < 0) continue;
+            full = calloc((size_t)cols * (size_t)cols, sizeof(double));
+            assert_non_null(full);
             a = totalacc_eval(L, n);
             ref = subtree_sum(L, n);
             /* both sides carry rounding of order u * cond of the node; these
@@ -80,11 +83,27 @@ static void test_lemma1_square_root_form(void **state)
             assert_true(nd->trows <= cols);
             /* upper triangular with rows missing: row r starts at column
              * pos[r] >= r, strictly increasing, zeros left of it */
+            totalacc_unpack(L, n, full);
             for (r = 0; r < nd->trows; r++) {
                 const int32_t *pos = L->t.trowpos + nd->tpos;
                 assert_true(pos[r] >= r && pos[r] < cols && (r == 0 || pos[r] > pos[r - 1]));
-                for (j = 0; j < pos[r]; j++) assert_true(L->t.tdata[nd->T + (int64_t)r * cols + j] == 0.0);
+                for (j = 0; j < pos[r]; j++) assert_true(full[(int64_t)r * cols + j] == 0.0);
             }
+            /* the packed rows evaluate as the full ones: A = ||T_full z||^2 */
+            {
+                const int32_t *perm = L->t.tperm + nd->handles;
+                const double *x = L->t.data + nd->xf;
+                double sum = 0;
+                for (r = 0; r < nd->trows; r++) {
+                    double v = full[(int64_t)r * cols + cols - 1];
+                    int32_t q, k;
+                    for (q = 0; q < nd->nh; q++)
+                        for (k = 0; k < 6; k++) v += full[(int64_t)r * cols + 6 * q + k] * x[6 * perm[q] + k];
+                    sum += v * v;
+                }
+                assert_true(fabs(sum - a) <= 1e-12 * (a + 1e-300) + 1e-300);
+            }
+            free(full);
         }
         aqs_linkage_destroy(L);
     }
