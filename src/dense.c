@@ -315,52 +315,61 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
 {
     int j, i, c, s = 0, rows = 0;
     for (j = 0; j < n; j++) {
-        double *a, *rj = R + (long)j * n, norm = 0.0, alpha, v0, vnorm2, scale = 0.0, top;
-        int q = p - s; /* D's live rows are s .. p - 1 */
-        if (q == 0) { /* nothing of D left: the rest of R stands */
+        double *a, *rj = R + (long)j * n, norm = 0.0, alpha, v0, tau, scale = 0.0, top;
+        int q = p - s, pr = present[j], i0;
+        if (q == 0) {
             for (; j < n; j++) rows += present[j] != 0;
             return rows;
         }
         a = D + (long)j * p + s;
         for (i = 0; i < q; i++)
             if (fabs(a[i]) > scale) scale = fabs(a[i]);
-        if (scale == 0.0) { /* nothing of D in this column */
-            rows += present[j] != 0;
-            continue;
-        }
-        /* the pivot: R's row j if present, else D's first live row */
-        top = present[j] ? rj[j] : a[0];
+        if (scale == 0.0) { rows += pr != 0; continue; }
+        top = pr ? rj[j] : a[0];
         if (fabs(top) > scale) scale = fabs(top);
+        i0 = pr ? 0 : 1;
         {
-            const double inv = 1.0 / scale; /* scaled: no overflow or underflow */
-            for (i = present[j] ? 0 : 1; i < q; i++) norm += (a[i] * inv) * (a[i] * inv);
+            const double inv = 1.0 / scale;
+            for (i = i0; i < q; i++) norm += (a[i] * inv) * (a[i] * inv);
             norm += (top * inv) * (top * inv);
         }
         norm = scale * sqrt(norm);
         alpha = top > 0 ? -norm : norm;
-        v0 = top - alpha; /* v = [top - alpha; the rest of the column]: |v0| >= norm > 0 */
-        if (present[j]) {
-            vnorm2 = v0 * v0;
-            for (i = 0; i < q; i++) vnorm2 += a[i] * a[i];
-            for (c = j + 1; c < n; c++) {
-                double *b = D + (long)c * p + s, sum = v0 * rj[c];
-                for (i = 0; i < q; i++) sum += a[i] * b[i];
-                sum = 2.0 * sum / vnorm2;
-                rj[c] -= sum * v0;
-                for (i = 0; i < q; i++) b[i] -= sum * a[i];
+        v0 = top - alpha;
+        /* H = I - tau v v^T with v = [1; a / v0] (|a_i / v0| <= 1: LAPACK's
+         * dlarfg scaling) and tau = -v0 / alpha in [1, 2] */
+        tau = -v0 / alpha;
+        {
+            const double iv = 1.0 / v0;
+            for (i = i0; i < q; i++) a[i] *= iv;
+        }
+        {
+            /* t: the pivot entry of column c (R's row j, or D's first live
+             * row), x: the rest; two columns per pass over a */
+            const double *ai = a + i0;
+            int qi = q - i0;
+            for (c = j + 1; c + 1 < n; c += 2) {
+                double *b1 = D + (long)c * p + s, *b2 = b1 + p;
+                double *t1 = pr ? rj + c : b1, *t2 = pr ? rj + c + 1 : b2;
+                double s1 = *t1, s2 = *t2, f1, f2;
+                const double *x1 = b1 + i0, *x2 = b2 + i0;
+                for (i = 0; i < qi; i++) { s1 += ai[i] * x1[i]; s2 += ai[i] * x2[i]; }
+                f1 = tau * s1; f2 = tau * s2;
+                *t1 -= f1; *t2 -= f2;
+                for (i = 0; i < qi; i++) { b1[i0 + i] -= f1 * ai[i]; b2[i0 + i] -= f2 * ai[i]; }
+                if (!pr) { rj[c] = *t1; rj[c + 1] = *t2; }
             }
-        } else {
-            /* D's row s becomes R's row j */
-            vnorm2 = v0 * v0;
-            for (i = 1; i < q; i++) vnorm2 += a[i] * a[i];
-            for (c = j + 1; c < n; c++) {
-                double *b = D + (long)c * p + s, sum = v0 * b[0];
-                for (i = 1; i < q; i++) sum += a[i] * b[i];
-                sum = 2.0 * sum / vnorm2;
-                b[0] -= sum * v0;
-                for (i = 1; i < q; i++) b[i] -= sum * a[i];
-                rj[c] = b[0];
+            for (; c < n; c++) {
+                double *b1 = D + (long)c * p + s, *t1 = pr ? rj + c : b1, s1 = *t1, f1;
+                const double *x1 = b1 + i0;
+                for (i = 0; i < qi; i++) s1 += ai[i] * x1[i];
+                f1 = tau * s1;
+                *t1 -= f1;
+                for (i = 0; i < qi; i++) b1[i0 + i] -= f1 * ai[i];
+                if (!pr) rj[c] = *t1;
             }
+        }
+        if (!pr) {
             for (c = 0; c < j; c++) rj[c] = 0.0;
             present[j] = 1;
             s++;

@@ -361,9 +361,11 @@ static void gram(const double *R, const int *present, int n, const double *D, in
 }
 
 /* dense_qr_append and dense_qr_r_colmajor: the Gram matrix (what
- * ||T z||^2 evaluates) is kept to rounding, R stays upper triangular with
+ * ||T z||^2 evaluates) is kept to rounding (1e-13 of its largest entry:
+ * n <= 20 reflections of unit-size entries), R stays upper triangular with
  * its rows where present says, and the row counts are right: on random
- * sizes, random present patterns, and D of full and deficient rank. */
+ * sizes, random present patterns (none in a third of the trials), D of full
+ * and deficient rank, and entries scaled by 1e150 and 1e-160. */
 static void test_qr_append(void **state)
 {
     uint64_t s = 77;
@@ -372,7 +374,7 @@ static void test_qr_append(void **state)
     for (trial = 0; trial < 400; trial++) {
         int n = 1 + (int)test_uniform(&s, 0, 19.99), p = (int)test_uniform(&s, 0, 9.99), i, j, rows, np = 0;
         int present[20], copy[20];
-        double R[400], R0[400], D[200], D0[200], G0[400], G1[400], S[600], scale = 0;
+        double R[400], R0[400], D[200], D0[200], G0[400], G1[400], S[600], scale = 0, sc;
         for (j = 0; j < n; j++) present[j] = trial % 3 != 0 && test_uniform(&s, 0, 1) < 0.6;
         fill(&s, R, n * n);
         for (j = 0; j < n; j++)
@@ -386,7 +388,12 @@ static void test_qr_append(void **state)
         memcpy(copy, present, sizeof present);
         for (j = 0; j < n; j++) np += present[j];
         gram(R0, present, n, D0, p, G0);
+        /* far from 1: the reflections are scaled (no overflow, no underflow) */
+        sc = trial % 5 == 1 ? 1e150 : trial % 5 == 2 ? 1e-160 : 1.0;
+        for (i = 0; i < n * n; i++) R[i] *= sc;
+        for (i = 0; i < p * n; i++) D[i] *= sc;
         rows = dense_qr_append(R, n, present, D, p);
+        for (i = 0; i < n * n; i++) R[i] /= sc;
         gram(R, present, n, NULL, 0, G1);
         for (i = 0; i < n * n; i++) scale = fmax(scale, fabs(G0[i]));
         for (i = 0; i < n * n; i++) assert_true(fabs(G1[i] - G0[i]) <= 1e-13 * (scale + 1));
