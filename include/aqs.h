@@ -346,6 +346,24 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *linkage, int32_t ma
 #define AQS_JOINT_BOUND_SUM 1
 AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *linkage, int32_t kind);
 
+/** Exact fallback: when an adaptive solve computes more than fraction of
+ *  the counted joints (those of aqs_solve_stats.counted_joints), computing
+ *  almost everything adaptively costs more than an exact solve, so the next
+ *  AQS_FALLBACK_RUN solves are exact, by the articulated-body algorithm
+ *  (whatever aqs_linkage_set_exact_solver says), and the one after is
+ *  adaptive again to see whether the loads still need that many joints.
+ *  Exact solves report error_bound 0, every joint computed and
+ *  aqs_solve_stats.fallback = 1. fraction in [0, 1]; 0, the default, turns
+ *  it off. Inactive with a cap (aqs_linkage_set_max_computed) or eps = 0.
+ *  Setting it, a tolerance or a cap starts over with an adaptive solve.
+ *  Any phase. Returns AQS_OK, AQS_EINVAL (fraction not finite or outside
+ *  [0, 1]; nothing changed). */
+#define AQS_FALLBACK_RUN 15
+AQS_API aqs_status aqs_linkage_set_exact_fallback(aqs_linkage *linkage, double fraction);
+/** The fraction of aqs_linkage_set_exact_fallback into *fraction. Returns
+ *  AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, double *fraction);
+
 /** Refine the last solve down to a smaller eps (same measure) by continuing
  *  its priority queue instead of starting over. Valid only right after a
  *  solve or refine, before anything changes positions or loads; otherwise
@@ -367,7 +385,7 @@ typedef struct aqs_solve_stats {
     int32_t nodes_updated;   /**< assembly-tree nodes recomputed by the last solve, or by the last step (before its solve and after its move) */
     int32_t nodes_processed; /**< internal nodes back-substituted by the last solve */
     int32_t capped;          /**< 1 if the last solve stopped at the max_computed cap */
-    int32_t reserved;        /**< 0 */
+    int32_t fallback;        /**< 1 if the last solve was exact because of aqs_linkage_set_exact_fallback */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

@@ -620,11 +620,19 @@ static int exact_by_aba(const aqs_linkage *L)
     return L->exact_solver == AQS_EXACT_ABA && L->s.eps == 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
 }
 
+/* The exact fallback applies to adaptive solves (eps > 0, no cap). */
+static int fallback_applies(const aqs_linkage *L)
+{
+    return L->fallback > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
+}
+
 static aqs_status solve(aqs_linkage *L, const char *fn)
 {
     aqs_status st;
+    int fb = fallback_applies(L) && L->fb_left > 0;
     L->exact_by_aba = 0;
-    if (exact_by_aba(L)) {
+    L->fb_last = 0;
+    if (exact_by_aba(L) || fb) {
         if ((st = aba_solve(L)) != AQS_OK) {
             L->solved = 0;
             L->s.valid = 0;
@@ -643,6 +651,12 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
         return st;
     }
     L->solved = 1;
+    if (fb) {
+        L->fb_left--;
+        L->fb_last = 1;
+    } else if (fallback_applies(L) && !L->s.all && (double)L->s.computed > L->fallback * (double)L->s.counted) {
+        L->fb_left = AQS_FALLBACK_RUN;
+    }
     return AQS_OK;
 }
 
@@ -737,6 +751,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     L->s.metric = metric;
     L->s.eps = eps;
     L->s.valid = 0;
+    L->fb_left = 0;
     return AQS_OK;
 }
 
@@ -754,6 +769,28 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
         L->s.valid = 0;
     }
     L->s.max_computed = max_joints;
+    L->fb_left = 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_exact_fallback(aqs_linkage *L, double fraction)
+{
+    static const char fn[] = "aqs_linkage_set_exact_fallback";
+    CHECK_LINKAGE(L);
+    if (!isfinite(fraction) || fraction < 0.0 || fraction > 1.0)
+        return lk_fail(L, AQS_EINVAL, "%s: fraction = %g must be finite and in [0, 1]", fn, fraction);
+    L->fallback = fraction;
+    L->fb_left = 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *cL, double *fraction)
+{
+    static const char fn[] = "aqs_linkage_get_exact_fallback";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, fraction);
+    *fraction = L->fallback;
     return AQS_OK;
 }
 
@@ -813,6 +850,7 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.nodes_updated = L->t.nodes_updated;
     full.nodes_processed = L->s.nprocessed;
     full.capped = L->s.capped;
+    full.fallback = L->fb_last;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }

@@ -176,6 +176,9 @@ struct aqs_linkage {
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
+    double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
+    int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
+    int fb_last;          /* the last solve was such an exact solve */
     aba_state aba;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */

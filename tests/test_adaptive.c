@@ -814,6 +814,134 @@ static void test_eps_zero_trajectory(void **state)
     aqs_linkage_destroy(B);
 }
 
+/* Twin X (same bodies, joints and loads as L) solved exactly at L's
+ * current positions. */
+static void twin_solve(aqs_linkage *L, aqs_linkage *X)
+{
+    double *q = malloc(sizeof(double) * (size_t)(L->nq + 1));
+    assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)L->nq), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(X, q, (size_t)L->nq), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+    free(q);
+}
+
+/* L's accelerations against X's: the largest difference relative to the
+ * largest of X's. */
+static double twin_diff(aqs_linkage *L, aqs_linkage *X)
+{
+    int32_t nv = L->nv, i;
+    double *a = malloc(sizeof(double) * (size_t)(nv + 1)), *b = malloc(sizeof(double) * (size_t)(nv + 1));
+    double d = 0, m = 0;
+    assert_int_equal(aqs_linkage_get_accelerations(L, a, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(X, b, (size_t)nv), AQS_OK);
+    for (i = 0; i < nv; i++) {
+        d = fmax(d, fabs(a[i] - b[i]));
+        m = fmax(m, fabs(b[i]));
+    }
+    free(a);
+    free(b);
+    return d / (m + 1e-300);
+}
+
+static aqs_solve_stats solve_stats(aqs_linkage *L, int step)
+{
+    aqs_solve_stats st;
+    st.size = sizeof st;
+    assert_int_equal(step ? aqs_linkage_step(L, 1e-3) : aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    return st;
+}
+
+/* The exact fallback: after an adaptive solve that computed more than the
+ * fraction of the counted joints, AQS_FALLBACK_RUN exact solves by the
+ * articulated-body algorithm (the same accelerations as a twin's exact
+ * solve at the same positions: the same code, so equal to rounding, 1e-12
+ * relative), then an adaptive probe; a probe that computes few joints ends
+ * it; off by default, with a cap and with eps = 0; a bad fraction is
+ * rejected and changes nothing. */
+static void test_exact_fallback(void **state)
+{
+    uint64_t r1 = 4242, r2 = 4242;
+    spec sp = {300, 0, 0, 40, 0, 3.0, 0};
+    aqs_linkage *L = random_linkage(&r1, &sp), *X = random_linkage(&r2, &sp);
+    static const double bad[] = {NAN, INFINITY, -0.1, 1.5};
+    const double f1[3] = {0.5, -1, 2};
+    aqs_solve_stats st;
+    double fr = -1;
+    int k, round;
+    (void)state;
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_ABA), AQS_OK);
+    assert_int_equal(aqs_linkage_get_exact_fallback(L, &fr), AQS_OK);
+    assert_true(fr == 0.0); /* off by default */
+    assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.5), AQS_OK);
+    for (k = 0; k < 4; k++) {
+        assert_int_equal(aqs_linkage_set_exact_fallback(L, bad[k]), AQS_EINVAL);
+        assert_non_null(strstr(aqs_linkage_last_error(L), "fraction"));
+        assert_int_equal(aqs_linkage_get_exact_fallback(L, &fr), AQS_OK);
+        assert_true(fr == 0.5);
+    }
+    assert_int_equal(aqs_linkage_get_exact_fallback(L, NULL), AQS_EINVAL);
+    /* eps = 0: exact anyway, never a fallback */
+    st = solve_stats(L, 0);
+    assert_int_equal(st.fallback, 0);
+    /* a tolerance so small that the adaptive solve computes almost every joint */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-13), AQS_OK);
+    for (round = 0; round < 2; round++) {
+        st = solve_stats(L, round);
+        assert_int_equal(st.fallback, 0); /* adaptive: the first, then the probe */
+        assert_true(st.error_bound <= 1e-13);
+        assert_true(st.computed_joints > st.counted_joints / 2);
+        for (k = 0; k < AQS_FALLBACK_RUN; k++) {
+            twin_solve(L, X); /* at the positions the solve (or step) starts from */
+            st = solve_stats(L, round); /* round 1: through steps */
+            assert_int_equal(st.fallback, 1);
+            assert_true(st.error_bound == 0.0);
+            assert_int_equal(st.computed_joints, st.counted_joints);
+            assert_true(twin_diff(L, X) <= 1e-12);
+        }
+    }
+    /* setting the tolerance starts over with an adaptive solve */
+    st = solve_stats(L, 0);
+    assert_int_equal(st.fallback, 0);
+    assert_int_equal(solve_stats(L, 0).fallback, 1);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
+    assert_int_equal(solve_stats(L, 0).fallback, 0);
+    /* a probe that computes few joints ends the fallback: without loads
+     * (no gravity here) nothing accelerates and the probe computes none */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-13), AQS_OK);
+    assert_int_equal(solve_stats(L, 0).fallback, 0);
+    assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+    for (k = 0; k < AQS_FALLBACK_RUN; k++) assert_int_equal(solve_stats(L, 0).fallback, 1);
+    st = solve_stats(L, 0); /* the probe */
+    assert_int_equal(st.fallback, 0);
+    assert_int_equal(st.computed_joints, 0);
+    for (k = 0; k < 2 * AQS_FALLBACK_RUN; k++) assert_int_equal(solve_stats(L, 0).fallback, 0);
+    /* one force and a loose eps: few joints, never a fallback */
+    assert_int_equal(aqs_body_set_force(L, 299, f1, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.25), AQS_OK);
+    for (k = 0; k < 2 * AQS_FALLBACK_RUN; k++) {
+        st = solve_stats(L, 1);
+        assert_int_equal(st.fallback, 0);
+        assert_true(st.computed_joints <= st.counted_joints / 2);
+    }
+    /* with a cap: never */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-13), AQS_OK);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 290), AQS_OK);
+    for (k = 0; k < 2 * AQS_FALLBACK_RUN; k++) assert_int_equal(solve_stats(L, 0).fallback, 0);
+    /* off: never */
+    assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.0), AQS_OK);
+    for (k = 0; k < 2 * AQS_FALLBACK_RUN; k++) {
+        st = solve_stats(L, 0);
+        assert_int_equal(st.fallback, 0);
+        assert_true(st.error_bound <= 1e-13);
+    }
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
+}
+
 /* On a 100,000-joint chain the nodes recomputed per step stay within a small
  * multiple of N_E + N_U log2 N (counters, not time). */
 static void test_cost_is_local(void **state)
@@ -910,6 +1038,7 @@ int main(void)
         cmocka_unit_test(test_lazy_equals_eager),
         cmocka_unit_test(test_eps_zero_trajectory),
         cmocka_unit_test(test_cost_is_local),
+        cmocka_unit_test(test_exact_fallback),
     };
     return cmocka_run_group_tests_name("adaptive", tests, NULL, NULL);
 }

@@ -24,6 +24,7 @@ REQUIRED = {
     "nodes_updated": float, "nodes_processed": float, "displacement_error": (int, float),
     "max_error_bound": (int, float), "ratio_R": float, "peak_rss_bytes": int,
     "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
+    "fallback": (int, float), "fallback_steps": int,
 }
 
 
@@ -143,6 +144,20 @@ def test_displacement_error_recomputed(tmp_path):
     assert d["displacement_error"] == pytest.approx(err, rel=1e-8)
 
 
+def test_fallback(tmp_path):
+    """--fallback: steps after one that computed more than the fraction of the
+    joints are exact (fallback_steps counts them; every 16th is adaptive)."""
+    out = tmp_path / "fb.jsonl"
+    run("--joints", "300", "--steps", "20", "--eps", "1e-13", "--forces", "10", "--quiet",
+        "--fallback", "0.5", "--out", str(out))
+    run("--joints", "300", "--steps", "20", "--eps", "1e-13", "--forces", "10", "--quiet",
+        "--append", "--out", str(out))
+    on, off = [json.loads(line) for line in out.read_text().splitlines()]
+    assert on["fallback"] == 0.5 and off["fallback"] == 0
+    assert on["fallback_steps"] >= 15 and off["fallback_steps"] == 0
+    assert on["computed_joints"] > off["computed_joints"] / 2
+
+
 def test_tip_path(tmp_path):
     tip = tmp_path / "tip.csv"
     run("--scene", "chain30", "--steps", "4", "--eps", "2^-5", "--tip-path", str(tip),
@@ -169,6 +184,7 @@ def test_tip_path(tmp_path):
     (["--forces", "1,,"], "--forces"),
     (["--forces", "31", "--scene", "chain30"], "forces"),
     (["--steps"], "needs a value"),
+    (["--fallback", "1.5"], "--fallback"),
 ])
 def test_bad_input(args, message):
     res = run("--joints", "200", "--quiet", *args, check=False)

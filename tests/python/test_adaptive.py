@@ -264,6 +264,34 @@ def test_exact_by_default_and_with_eps_zero():
         assert stats_again.nodes_updated == 0
 
 
+def test_exact_fallback():
+    """set_exact_fallback: after an adaptive solve that computed more than the
+    fraction of the joints, FALLBACK_RUN exact solves (the exact accelerations
+    of the dense reference), then an adaptive probe; bad fractions raise and
+    change nothing."""
+    name = "tree-60-mixed"
+    case, acc, forces = exact(name)
+    with build(aqs, case) as L:
+        assert L.exact_fallback == 0.0
+        for bad in (float("nan"), -0.5, 2.0):
+            with pytest.raises(aqs.InvalidArgument, match="fraction"):
+                L.set_exact_fallback(bad)
+        assert L.exact_fallback == 0.0
+        L.set_exact_fallback(0.5)
+        assert L.exact_fallback == 0.5
+        L.set_tolerance("rel_joint", 1e-13)
+        first = L.solve()
+        assert not first.fallback and first.computed_joints > first.counted_joints / 2
+        for _ in range(aqs.FALLBACK_RUN):
+            stats = L.solve()
+            assert stats.fallback and stats.error_bound == 0.0
+            assert stats.computed_joints == stats.counted_joints
+            assert rel_err(L.accelerations(), acc) <= SAME
+        assert not L.solve().fallback  # the probe
+        L.set_exact_fallback(0.0)
+        assert not any(L.solve().fallback for _ in range(2 * aqs.FALLBACK_RUN))
+
+
 def test_nothing_moves():
     """Every joint fixed: nothing is counted, a tolerance changes nothing."""
     with aqs.Linkage() as L:
@@ -480,8 +508,8 @@ def test_adaptive_step_moves_only_computed_joints():
 
 def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
-             "nodes_updated", "nodes_processed", "capped"]
-    types = [str, float, float, int, int, int, int, bool]
+             "nodes_updated", "nodes_processed", "capped", "fallback"]
+    types = [str, float, float, int, int, int, int, bool, bool]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -510,12 +538,12 @@ def test_stats_struct_size_is_honoured():
         handle = L._handle
         full = _lib.aqs_solve_stats(size=ctypes.sizeof(_lib.aqs_solve_stats))
         assert _lib.lib.aqs_linkage_get_stats(handle, full) == aqs.OK
-        assert full.metric == aqs.METRIC_ABS_JOINT and full.eps == 0.5 and full.reserved == 0
+        assert full.metric == aqs.METRIC_ABS_JOINT and full.eps == 0.5 and full.fallback == 0
         for size, filled in ((8, ["metric"]), (16, ["metric", "eps"])):
             partial = _lib.aqs_solve_stats(size=size, metric=-7, eps=-7.0, error_bound=-7.0,
                                            computed_joints=-7, counted_joints=-7,
                                            nodes_updated=-7, nodes_processed=-7, capped=-7,
-                                           reserved=-7)
+                                           fallback=-7)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:

@@ -126,4 +126,4 @@ def test_structs_match(header):
     stats = _lib.aqs_solve_stats
     assert ctypes.sizeof(stats) == 48
     assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
-    assert stats.reserved.offset == 44
+    assert stats.fallback.offset == 44

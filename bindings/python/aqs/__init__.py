@@ -41,7 +41,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
-                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES,
+                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
@@ -57,7 +57,7 @@ __all__ = [
     "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
-    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS",
+    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
@@ -119,6 +119,7 @@ class SolveStats:
         step(): by the update before its solve plus the one after the move).
     nodes_processed: internal tree nodes back-substituted by the solve.
     capped: True if the solve stopped at the set_max_computed cap.
+    fallback: True if the solve was exact because of set_exact_fallback.
     """
 
     metric: str
@@ -129,13 +130,15 @@ class SolveStats:
     nodes_updated: int
     nodes_processed: int
     capped: bool
+    fallback: bool = False
 
     @classmethod
     def _from_c(cls, c):
         return cls(metric=_lib.METRIC_NAMES.get(c.metric, str(c.metric)), eps=float(c.eps),
                    error_bound=float(c.error_bound), computed_joints=int(c.computed_joints),
                    counted_joints=int(c.counted_joints), nodes_updated=int(c.nodes_updated),
-                   nodes_processed=int(c.nodes_processed), capped=bool(c.capped))
+                   nodes_processed=int(c.nodes_processed), capped=bool(c.capped),
+                   fallback=bool(c.fallback))
 
 
 def version():
@@ -545,6 +548,23 @@ class Linkage:
         base may exceed the cap. (aqs_linkage_set_max_computed)"""
         f = "aqs_linkage_set_max_computed"
         self._call(f, _index(max_joints, f, "max_joints"))
+
+    def set_exact_fallback(self, fraction):
+        """Exact fallback (aqs_linkage_set_exact_fallback): when an adaptive
+        solve computes more than fraction (in [0, 1]) of the counted joints,
+        the next aqs.FALLBACK_RUN solves are exact, by the articulated-body
+        algorithm (SolveStats.fallback is True, error_bound 0), and the one
+        after is adaptive again. 0, the default, turns it off. Inactive with
+        a cap or eps = 0. Any phase."""
+        f = "aqs_linkage_set_exact_fallback"
+        self._call(f, float(fraction))
+
+    @property
+    def exact_fallback(self):
+        """The fraction of set_exact_fallback (0.0: off)."""
+        value = ctypes.c_double()
+        self._call("aqs_linkage_get_exact_fallback", ctypes.byref(value))
+        return value.value
 
     def set_joint_bound(self, kind):
         """Which certified bound the joint-wise measures ("abs_joint",

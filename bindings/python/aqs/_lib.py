@@ -90,6 +90,10 @@ JOINT_BOUNDS = {
 EXACT_ABA = 0  # articulated-body algorithm over the joints, O(N) (default)
 EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tree
 
+# Exact solves after an adaptive solve that computed more than the fallback
+# fraction of the joints (aqs_linkage_set_exact_fallback).
+FALLBACK_RUN = 15
+
 EXACT_SOLVERS = {
     "aba": EXACT_ABA,
     "dca": EXACT_DCA,
@@ -161,7 +165,7 @@ class aqs_solve_stats(ctypes.Structure):
         ("nodes_updated", ctypes.c_int32),    # tree nodes recomputed by the last update
         ("nodes_processed", ctypes.c_int32),  # internal nodes back-substituted by the solve
         ("capped", ctypes.c_int32),           # 1 if the solve stopped at the max_computed cap
-        ("reserved", ctypes.c_int32),         # 0
+        ("fallback", ctypes.c_int32),         # 1 if exact because of the exact fallback
     ]
 
 
@@ -268,6 +272,8 @@ PROTOTYPES = {
     "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_set_exact_solver": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
+    "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),
+    "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_refine": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_stats": (status_t, [linkage_p, solve_stats_p]),
     "aqs_joint_get_computed": (status_t, [linkage_p, ctypes.c_int32, int32_p]),
