@@ -777,12 +777,11 @@ static void test_certificates_small_steps(void **state)
 static aqs_linkage *straight_chain(void)
 {
     aqs_linkage *L = test_new_linkage();
-    const double q1[4] = {1, 0, 0, 0}, zax[3] = {0, 0, 1}, sz[3] = {0.3, 0, 0}, at[3] = {0, 0, 0};
+    const double q1[4] = {1, 0, 0, 0}, sz[3] = {0.3, 0, 0}, at[3] = {0, 0, 0};
     int32_t b;
     for (b = 0; b < 8; b++) {
-        double pos[3] = {b ? 1.0 : 0.0, 0, 0};
-        test_add_body(L, 1.0, 0.2, 0, 0, 0.1);
-        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, b - 1, b, pos, q1, zax, NULL), AQS_OK);
+        (void)test_add_joint(L, AQS_JOINT_REVOLUTE, b - 1, test_add_body(L, 1.0, 0.2, 0, 0, 0.1),
+                             b ? 1.0 : 0.0, 0, 0, 0, 0, 1);
         assert_int_equal(aqs_shape_add(L, b, AQS_SHAPE_SPHERE, sz, at, q1, NULL), AQS_OK);
     }
     assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
