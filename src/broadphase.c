@@ -7,10 +7,14 @@
 #include <math.h>
 #include <string.h>
 
-/* A certificate's margin, as a fraction of the smallest shape (bounding
- * sphere radius) of its node's subassembly (docs/collision.md). */
+/* A certificate's margin: the larger of CERT_MARGIN times the smallest
+ * shape (bounding sphere radius) of its node's subassembly and CERT_SIZE
+ * times the node's sphere radius at build (docs/collision.md). */
 #ifndef CERT_MARGIN
 #define CERT_MARGIN 0.5
+#endif
+#ifndef CERT_SIZE
+#define CERT_SIZE 0.003
 #endif
 
 /* ------------------------------------------------------------ filters */
@@ -234,8 +238,11 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
 }
 
-/* Certificate margins: CERT_MARGIN times the smallest shape radius below
- * each node (0 for shapeless ones, never certified). Returns n's smallest. */
+/* Certificate margins (0 for shapeless nodes, never certified): a node's
+ * motion bound grows with its size (rotations times lever arms), so a margin
+ * in proportion keeps large nodes' certificates as long-lived as small ones';
+ * the shape floor keeps small nodes' from expiring at once. Returns the
+ * smallest shape radius below n. */
 static double set_margins(const aqs_linkage *L, collision *c, int32_t n)
 {
     const node *C = &L->t.nodes[n];
@@ -247,7 +254,7 @@ static double set_margins(const aqs_linkage *L, collision *c, int32_t n)
         for (k = c->comp_start[C->comp]; k < c->comp_start[C->comp + 1]; k++)
             r = fmin(r, c->shapes[c->comp_shapes[k]].radius);
     }
-    c->margin[n] = r < HUGE_VAL ? CERT_MARGIN * r : 0.0;
+    c->margin[n] = r < HUGE_VAL ? fmax(CERT_MARGIN * r, CERT_SIZE * c->sph[4 * n + 3]) : 0.0;
     return r;
 }
 
