@@ -7,6 +7,16 @@
 #include <math.h>
 #include <string.h>
 
+/* A certificate's margin: the larger of CERT_MARGIN times the smallest
+ * shape (bounding sphere radius) of its node's subassembly and CERT_SIZE
+ * times the node's sphere radius at build (docs/collision.md). */
+#ifndef CERT_MARGIN
+#define CERT_MARGIN 0.5
+#endif
+#ifndef CERT_SIZE
+#define CERT_SIZE 0.003
+#endif
+
 /* ------------------------------------------------------------ filters */
 
 static uint32_t body_group(const collision *c, int32_t b)
@@ -119,8 +129,18 @@ void broadphase_reset(aqs_linkage *L)
     lk_free(L, c->ncont);
     lk_free(L, c->xoff);
     lk_free(L, c->xcnt);
-    lk_free(L, c->xpool[0]);
-    lk_free(L, c->xpool[1]);
+    lk_free(L, c->xp.buf[0]);
+    lk_free(L, c->xp.buf[1]);
+    lk_free(L, c->np.buf[0]);
+    lk_free(L, c->np.buf[1]);
+    lk_free(L, c->mabs);
+    lk_free(L, c->mrel);
+    lk_free(L, c->mchild);
+    lk_free(L, c->cert);
+    lk_free(L, c->mcert);
+    lk_free(L, c->margin);
+    lk_free(L, c->noff);
+    lk_free(L, c->ncnt);
     lk_free(L, c->pk);
     lk_free(L, c->wpose);
     lk_free(L, c->wcen);
@@ -132,8 +152,11 @@ void broadphase_reset(aqs_linkage *L)
     c->comp_start = c->comp_shapes = NULL;
     c->sph = c->centres = NULL;
     c->moved = c->cached = NULL;
-    c->ncont = c->xoff = c->xcnt = c->xpool[0] = c->xpool[1] = NULL;
-    c->xcap = c->xused = c->xcur = 0;
+    c->ncont = c->xoff = c->xcnt = c->noff = c->ncnt = NULL;
+    memset(&c->xp, 0, sizeof c->xp);
+    memset(&c->np, 0, sizeof c->np);
+    c->mabs = c->mrel = c->mchild = c->mcert = c->margin = NULL;
+    c->cert = NULL;
     c->comp_world = c->pk = c->wpose = NULL;
     c->wcen = NULL;
     c->wstamp = NULL;
@@ -147,7 +170,9 @@ void broadphase_forget(aqs_linkage *L)
     collision *c = L->col;
     if (c && c->built && L->t.nnodes > 0) {
         memset(c->cached, 0, (size_t)L->t.nnodes);
-        c->xused = 0;
+        c->xp.used = 0;
+        memset(c->cert, 0, (size_t)L->t.nnodes); /* near lists were filtered */
+        c->np.used = 0;
     }
 }
 
@@ -163,6 +188,31 @@ static int32_t comp_of_shape(const aqs_linkage *L, const shape_def *s)
     return s->body < 0 ? L->m.ncomp : L->m.comp_of_body[s->body];
 }
 
+/* Motion bounds of node n at its refit, from the old and new Pk (pose of B
+ * in n's frame) and its children's bounds. A point of A moved by at most
+ * dA = mabs[a] - its value at n's last refit, in A's frame = n's; a point x
+ * of B moved by at most dB in B's frame, so by |x_new - x_old| + |Pk_new x_old
+ * - Pk_old x_old| <= dB + placement_motion(B's new sphere grown by dB) in n's.
+ * Hence mabs[n] += max(dA, dB + dP) and the relative motion mrel[n] += dA +
+ * dB + dP, rounded up (certificate.c). */
+static void account_motion(const aqs_linkage *L, collision *c, int32_t n, const pose *old_pk)
+{
+    const node *C = &L->t.nodes[n];
+    double dA, dB, dP;
+    if (c->first_fit) {
+        dA = dB = dP = 0.0;
+    } else {
+        dA = (c->mabs[C->a] - c->mchild[2 * n]) * (1.0 + 1e-12);
+        dB = (c->mabs[C->b] - c->mchild[2 * n + 1]) * (1.0 + 1e-12);
+        dP = placement_motion(old_pk, &c->pk[n], c->sph + 4 * C->b, dB);
+    }
+    c->mchild[2 * n] = c->mabs[C->a];
+    c->mchild[2 * n + 1] = c->mabs[C->b];
+    if (dA == 0.0 && dB == 0.0 && dP == 0.0) return;
+    c->mabs[n] = bound_up(c->mabs[n] + fmax(dA, bound_up(dB + dP)));
+    c->mrel[n] = bound_up(c->mrel[n] + bound_up(bound_up(dA + dB) + dP));
+}
+
 /* Refit node n if it moved (children first). */
 static void refit(aqs_linkage *L, collision *c, int32_t n)
 {
@@ -176,7 +226,9 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     c->nodes_refit++;
     refit(L, c, C->a);
     refit(L, c, C->b);
+    Pk = c->pk[n];
     child_in_node(L, C, &c->pk[n]);
+    account_motion(L, c, n, &Pk);
     Pk = c->pk[n];
     mat3_vec(Pk.R, c->sph + 4 * C->b, sb);
     sb[0] += Pk.p[0];
@@ -184,6 +236,26 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     sb[2] += Pk.p[2];
     sb[3] = c->sph[4 * C->b + 3];
     merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
+}
+
+/* Certificate margins (0 for shapeless nodes, never certified): a node's
+ * motion bound grows with its size (rotations times lever arms), so a margin
+ * in proportion keeps large nodes' certificates as long-lived as small ones';
+ * the shape floor keeps small nodes' from expiring at once. Returns the
+ * smallest shape radius below n. */
+static double set_margins(const aqs_linkage *L, collision *c, int32_t n)
+{
+    const node *C = &L->t.nodes[n];
+    double r = HUGE_VAL;
+    int32_t k;
+    if (C->joint >= 0) {
+        r = fmin(set_margins(L, c, C->a), set_margins(L, c, C->b));
+    } else {
+        for (k = c->comp_start[C->comp]; k < c->comp_start[C->comp + 1]; k++)
+            r = fmin(r, c->shapes[c->comp_shapes[k]].radius);
+    }
+    c->margin[n] = r < HUGE_VAL ? fmax(CERT_MARGIN * r, CERT_SIZE * c->sph[4 * n + 3]) : 0.0;
+    return r;
 }
 
 static void fit_leaf(aqs_linkage *L, collision *c, int32_t n)
@@ -230,9 +302,20 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->ncont = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
     c->xoff = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
     c->xcnt = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
-    c->xcap = 4 * ns + 1024;
-    c->xpool[0] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
-    c->xpool[1] = lk_calloc(L, (size_t)c->xcap * 2, sizeof(int32_t));
+    c->xp.cap = 4 * ns + 1024;
+    c->xp.buf[0] = lk_calloc(L, (size_t)c->xp.cap * 2, sizeof(int32_t));
+    c->xp.buf[1] = lk_calloc(L, (size_t)c->xp.cap * 2, sizeof(int32_t));
+    c->np.cap = 8 * ns + 4096;
+    c->np.buf[0] = lk_calloc(L, (size_t)c->np.cap * 2, sizeof(int32_t));
+    c->np.buf[1] = lk_calloc(L, (size_t)c->np.cap * 2, sizeof(int32_t));
+    c->mabs = lk_calloc(L, (size_t)nn + 1, sizeof(double));
+    c->mrel = lk_calloc(L, (size_t)nn + 1, sizeof(double));
+    c->mchild = lk_calloc(L, (size_t)nn * 2 + 1, sizeof(double));
+    c->cert = lk_calloc(L, (size_t)nn + 1, 1);
+    c->mcert = lk_calloc(L, (size_t)nn + 1, sizeof(double));
+    c->margin = lk_calloc(L, (size_t)nn + 1, sizeof(double));
+    c->noff = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
+    c->ncnt = lk_calloc(L, (size_t)nn + 1, sizeof(int32_t));
     c->comp_world = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(pose));
     c->pk = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
     c->wpose = lk_calloc(L, (size_t)nn + 1, sizeof(pose));
@@ -241,7 +324,9 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->placed = lk_calloc(L, (size_t)ns + 1, sizeof(placed_shape));
     c->centres = lk_calloc(L, (size_t)ns * 3 + 1, sizeof(double));
     if (!c->shape_in || !c->comp_start || !c->comp_shapes || !c->sph || !c->moved || !c->cached ||
-        !c->ncont || !c->xoff || !c->xcnt || !c->xpool[0] || !c->xpool[1] ||
+        !c->ncont || !c->xoff || !c->xcnt || !c->xp.buf[0] || !c->xp.buf[1] || !c->np.buf[0] ||
+        !c->np.buf[1] || !c->mabs || !c->mrel || !c->mchild || !c->cert || !c->mcert ||
+        !c->margin || !c->noff || !c->ncnt ||
         !c->comp_world || !c->pk || !c->wpose || !c->wcen || !c->wstamp || !c->placed || !c->centres) {
         broadphase_reset(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (collision data of %d nodes, %d shapes)",
@@ -265,7 +350,12 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     }
     c->built = 1;
     c->nodes_refit = 0;
-    if (nn > 0) refit(L, c, L->t.root);
+    c->first_fit = 1;
+    if (nn > 0) {
+        refit(L, c, L->t.root);
+        (void)set_margins(L, c, L->t.root);
+    }
+    c->first_fit = 0;
     return AQS_OK;
 }
 
@@ -280,6 +370,9 @@ typedef struct {
     int rec;      /* record hits as cross pairs of the node being computed */
     int penalty;  /* apply penalty forces instead of writing contacts */
     int overflow; /* the pair pool ran full during this query: cache nothing more */
+    double grow;  /* certifying: every sphere's radius grows by grow (half the margin) */
+    int near_full; /* the near-list pool ran full during this query: certify nothing more */
+    int full;      /* AQS_COLLIDE_FULL: no certificate used or made */
 } query;
 
 static int shapes_may_touch(const placed_shape *a, const double ca[3], const placed_shape *b,
@@ -325,15 +418,14 @@ static void apply_penalty(query *q, int32_t a, int32_t b, double depth, const do
     push_group(q, b, 1.0, depth, n, p);
 }
 
-/* Narrow phase of shapes i and j placed at pi, pj (sphere centres ci, cj):
- * a is the lower index, or the body when the other is an obstacle. */
-static void test_shapes(query *q, int32_t i, const placed_shape *pi, const double ci[3], int32_t j,
+/* Narrow phase of shapes i and j (allowed) placed at pi, pj (sphere centres
+ * ci, cj): a is the lower index, or the body when the other is an obstacle. */
+static void narrow_pair(query *q, int32_t i, const placed_shape *pi, const double ci[3], int32_t j,
                         const placed_shape *pj, const double cj[3])
 {
     collision *c = q->c;
     double depth, nrm[3], pt[3];
     int swap;
-    if (!pair_allowed(q->L, c, i, j)) return;
     if (!shapes_may_touch(pi, ci, pj, cj)) return;
     swap = c->shapes[i].body < 0 || (c->shapes[j].body >= 0 && j < i);
     c->narrow_tests++;
@@ -357,15 +449,13 @@ static void test_shapes(query *q, int32_t i, const placed_shape *pi, const doubl
     }
     q->count++;
     if (q->any) q->stop = 1;
-    if (q->rec) {
-        if (c->xused < c->xcap) {
-            c->xpool[c->xcur][2 * c->xused] = i;
-            c->xpool[c->xcur][2 * c->xused + 1] = j;
-            c->xused++;
-        } else {
-            q->overflow = 1;
-        }
-    }
+    if (q->rec && !pair_pool_push(&c->xp, i, j)) q->overflow = 1;
+}
+
+static void test_shapes(query *q, int32_t i, const placed_shape *pi, const double ci[3], int32_t j,
+                        const placed_shape *pj, const double cj[3])
+{
+    if (pair_allowed(q->L, q->c, i, j)) narrow_pair(q, i, pi, ci, j, pj, cj);
 }
 
 /* World pose of node n's frame and its sphere's world centre, memoized per
@@ -401,7 +491,15 @@ static void leaf_pair(query *q, int32_t x, int32_t y)
             double cj[3];
             narrow_place(&c->shapes[j], Wy, &c->shape_in[j], &pj);
             narrow_centre(&pj, cj);
-            test_shapes(q, i, &pi, ci, j, &pj, cj);
+            if (q->grow > 0.0) { /* certifying: pairs closer than the margin are near */
+                if (!pair_allowed(q->L, c, i, j) ||
+                    !spheres_overlap(ci, pi.s->radius + q->grow, cj, pj.s->radius + q->grow))
+                    continue;
+                if (!pair_pool_push(&c->np, i, j)) q->near_full = 1;
+                narrow_pair(q, i, &pi, ci, j, &pj, cj);
+            } else {
+                test_shapes(q, i, &pi, ci, j, &pj, cj);
+            }
         }
     }
 }
@@ -414,7 +512,9 @@ static void pair(query *q, int32_t x, int32_t y)
     c->volume_tests++;
     world(q, x);
     world(q, y);
-    if (!spheres_overlap(c->wcen + 3 * x, c->sph[4 * x + 3], c->wcen + 3 * y, c->sph[4 * y + 3])) return;
+    if (!spheres_overlap(c->wcen + 3 * x, c->sph[4 * x + 3] + q->grow, c->wcen + 3 * y,
+                         c->sph[4 * y + 3] + q->grow))
+        return;
     if (X->joint < 0 && Y->joint < 0) {
         leaf_pair(q, x, y);
     } else if (Y->joint < 0 || (X->joint >= 0 && c->sph[4 * x + 3] >= c->sph[4 * y + 3])) {
@@ -436,18 +536,13 @@ static void place_shape(query *q, int32_t i, placed_shape *p, double ctr[3])
     narrow_centre(p, ctr);
 }
 
-/* Node n did not move since its contacts were cached: test again only the
- * cached pairs (same placements, so the same bits as a traversal). */
-static void replay(query *q, int32_t n)
+/* Test again the pairs off .. off + cnt of pool p at the current placements
+ * (the same bits as a traversal would give). */
+static void retest(query *q, const pair_pool *p, int32_t off, int32_t cnt)
 {
-    collision *c = q->c;
-    const node *C = &q->L->t.nodes[n];
     int32_t k;
-    if (q->stop || C->joint < 0 || c->ncont[n] == 0) return;
-    replay(q, C->a);
-    replay(q, C->b);
-    for (k = c->xoff[n]; k < c->xoff[n] + c->xcnt[n] && !q->stop; k++) {
-        int32_t i = c->xpool[c->xcur][2 * k], j = c->xpool[c->xcur][2 * k + 1];
+    for (k = off; k < off + cnt && !q->stop; k++) {
+        int32_t i = p->buf[p->cur][2 * k], j = p->buf[p->cur][2 * k + 1];
         placed_shape pi, pj;
         double ci[3], cj[3];
         place_shape(q, i, &pi, ci);
@@ -456,9 +551,53 @@ static void replay(query *q, int32_t n)
     }
 }
 
+/* Node n did not move since its contacts were cached: test again only the
+ * cached pairs. */
+static void replay(query *q, int32_t n)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    if (q->stop || C->joint < 0 || c->ncont[n] == 0) return;
+    replay(q, C->a);
+    replay(q, C->b);
+    retest(q, &c->xp, c->xoff[n], c->xcnt[n]);
+}
+
 static int known(const collision *c, const aqs_linkage *L, int32_t n)
 {
     return L->t.nodes[n].joint < 0 || c->sph[4 * n + 3] < 0.0 || c->cached[n];
+}
+
+/* The pair test (A, B) of internal node n, in the current mode: re-test the
+ * near list if n's certificate still holds (its children moved apart by less
+ * than the margin since), else traverse with the spheres grown by half a
+ * fresh margin and certify; FULL mode traverses plainly. */
+static void cross(query *q, int32_t n)
+{
+    collision *c = q->c;
+    const node *C = &q->L->t.nodes[n];
+    int32_t off;
+    if (q->full) {
+        pair(q, C->a, C->b);
+        return;
+    }
+    if (c->cert[n] && (c->mrel[n] - c->mcert[n]) * (1.0 + 1e-12) < c->margin[n]) {
+        c->certs_reused++;
+        c->near_tests += c->ncnt[n];
+        retest(q, &c->np, c->noff[n], c->ncnt[n]);
+        return;
+    }
+    c->cert[n] = 0;
+    off = c->np.used;
+    q->grow = 0.5 * c->margin[n];
+    pair(q, C->a, C->b);
+    q->grow = 0.0;
+    if (q->stop || q->near_full) return;
+    c->cert[n] = 1;
+    c->certs_made++;
+    c->mcert[n] = c->mrel[n];
+    c->noff[n] = off;
+    c->ncnt[n] = c->np.used - off;
 }
 
 static void self(query *q, int32_t n)
@@ -475,36 +614,30 @@ static void self(query *q, int32_t n)
     }
     self(q, C->a);
     self(q, C->b);
-    off = c->xused;
+    off = c->xp.used;
     q->rec = 1;
-    pair(q, C->a, C->b);
+    cross(q, n);
     q->rec = 0;
     if (!q->stop && !q->overflow && known(c, q->L, C->a) && known(c, q->L, C->b)) {
         c->cached[n] = 1;
         c->ncont[n] = (int32_t)(q->count - before);
         c->xoff[n] = off;
-        c->xcnt[n] = c->xused - off;
+        c->xcnt[n] = c->xp.used - off;
     }
 }
 
-/* Move the live cross pairs into the other pool (or forget every cache
- * when they do not fit in half of it). */
-static void compact(aqs_linkage *L, collision *c)
+/* After a query: compact a pool that ran full or is half full. A cached
+ * node's replay reads its descendants' lists, so the contact lists are kept
+ * all or none (live[] cleared); a certificate stands alone, so near lists
+ * that do not fit are dropped one by one. */
+static void compact(aqs_linkage *L, pair_pool *p, int overflowed, unsigned char *live, int32_t *off,
+                    const int32_t *cnt, int partial)
 {
-    int32_t n, used = 0, *src = c->xpool[c->xcur], *dst = c->xpool[1 - c->xcur];
-    for (n = 0; n < L->t.nnodes; n++) {
-        if (!c->cached[n] || c->xcnt[n] == 0) continue;
-        if (used + c->xcnt[n] > c->xcap / 2) {
-            memset(c->cached, 0, (size_t)L->t.nnodes);
-            c->xused = 0;
-            return;
-        }
-        memcpy(dst + 2 * used, src + 2 * c->xoff[n], 2 * sizeof(int32_t) * (size_t)c->xcnt[n]);
-        c->xoff[n] = used;
-        used += c->xcnt[n];
+    if (!overflowed && p->used <= p->cap / 2) return;
+    if (!pair_pool_compact(p, L->t.nnodes, live, off, cnt, partial)) {
+        memset(live, 0, (size_t)L->t.nnodes);
+        p->used = 0;
     }
-    c->xcur = 1 - c->xcur;
-    c->xused = used;
 }
 
 /* World poses of every rigid group, top-down, by the traversal's operations. */
@@ -562,11 +695,18 @@ static size_t run_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
     q.rec = 0;
     q.overflow = 0;
     q.penalty = penalty;
+    q.grow = 0.0;
+    q.near_full = 0;
+    q.full = mode == AQS_COLLIDE_FULL;
     c->nodes_refit = c->volume_tests = c->narrow_tests = c->nodes_skipped = 0;
+    c->certs_reused = c->certs_made = c->near_tests = 0;
     if (L->t.nnodes == 0) return 0; /* everything welded to the world */
-    if (mode == AQS_COLLIDE_FULL)
+    if (q.full) { /* a query from scratch: no cached knowledge */
         for (n = 0; n < L->t.nnodes; n++)
             if (L->t.nodes[n].joint >= 0) c->moved[n] = 1;
+        memset(c->cert, 0, (size_t)L->t.nnodes);
+        c->np.used = 0;
+    }
     refit(L, c, L->t.root);
     if (mode == AQS_COLLIDE_BRUTE) {
         brute(&q);
@@ -580,7 +720,8 @@ static size_t run_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
         world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
         c->wstamp[n] = c->qstamp;
         self(&q, n);
-        if (q.overflow || c->xused > c->xcap / 2) compact(L, c);
+        compact(L, &c->xp, q.overflow, c->cached, c->xoff, c->xcnt, 0);
+        compact(L, &c->np, q.near_full, c->cert, c->noff, c->ncnt, 1);
     }
     return q.count;
 }

@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "certificate.h"
 #include "linkage.h"
 #include "narrowphase.h"
 #include "shape.h"
@@ -33,11 +34,22 @@ typedef struct collision {
     unsigned char *cached; /* the node's internal contacts at the last query are known (no joint
                               inside it moved since): none if ncont == 0, else the pairs below */
     int32_t *ncont;       /* per node: contacts inside its subassembly at the last query */
-    int32_t *xoff, *xcnt; /* per node: its cross pairs (contacts between its children), as
-                             shape index pairs at xpool[cur][2 xoff ...], xcnt of them */
-    int32_t *xpool[2];    /* two pools of xcap pairs: live ranges are compacted from one into
-                             the other when the current one is half full */
-    int32_t xcap, xused, xcur;
+    int32_t *xoff, *xcnt; /* per node: its cross pairs (contacts between its children), xcnt
+                             pairs from xoff in xp */
+    pair_pool xp;         /* 4 pairs per shape + 1,024: live lists are compacted into the
+                             other buffer when the current one is half full */
+    /* Certificates (docs/collision.md, "Certificates"). */
+    double *mabs;         /* per node: accumulated bound on the motion of any point of its
+                             subassembly in its frame since the build (leaves: 0) */
+    double *mrel;         /* per internal node: accumulated bound on the relative motion of a
+                             point of A and a point of B, in its frame */
+    double *mchild;       /* 2 per internal node: mabs of A and of B at its last refit */
+    unsigned char *cert;  /* the node's cross pair (A, B) is certified: every allowed shape
+                             pair off its near list was >= margin apart when mrel was mcert */
+    double *mcert, *margin;
+    int32_t *noff, *ncnt; /* per node: its near list, ncnt pairs from noff in np */
+    pair_pool np;         /* 8 pairs per shape + 4,096, compacted like xp */
+    int first_fit;        /* the build's refit: no motion to account for */
     pose *pk;             /* per internal node: the child frame of its principal joint in the
                              node's frame, cached at refit */
     pose *wpose;          /* per node: world pose of its frame, valid when wstamp == qstamp */
@@ -49,6 +61,7 @@ typedef struct collision {
 
     /* Work of the last query. */
     int32_t nodes_refit, volume_tests, narrow_tests, nodes_skipped;
+    int32_t certs_reused, certs_made, near_tests; /* internal (tests, bench) */
 } collision;
 
 /* Get (creating on first use) the collision state. NULL on allocation failure. */

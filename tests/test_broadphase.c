@@ -698,6 +698,232 @@ static void test_cache_overflow(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* ------------------------------------------------------------------------
+ * Certificates (docs/collision.md, "Certificates"): a moved node whose
+ * children moved apart by less than its margin since its cross pair was
+ * certified re-tests only its near list. */
+
+/* Internal nodes certified now. */
+static int32_t certified(const aqs_linkage *L)
+{
+    const collision *c = L->col;
+    int32_t n, k = 0;
+    for (n = 0; n < L->t.nnodes; n++) k += c->cert[n];
+    return k;
+}
+
+/* (a) A long run of small adaptive steps: two copies stepped alike, lazy
+ * queries only on copy 1 (its certificates carry over), full and brute
+ * force on copy 2. Every step the contacts are the same; certificates are
+ * reused far more often than made and the lazy query's sphere tests are far
+ * below the full query's; some expire on the way (made after the first
+ * query) and their near lists hold the contacts (near pairs re-tested). */
+static void certificates_small_steps(int32_t n, uint64_t seed, double h, int steps)
+{
+    scene S1, S2;
+    aqs_linkage *L1 = build(&S1, n, seed, 0), *L2 = build(&S2, n, seed, 0);
+    aqs_contact *lazy = calloc(LAZY_CAP, sizeof(aqs_contact)), *other = calloc(LAZY_CAP, sizeof(aqs_contact));
+    long vt_lazy = 0, vt_full = 0, reused = 0, made_later = 0, near = 0, contacts = 0;
+    int32_t step, vt;
+    for (step = 0; step <= steps; step++) {
+        size_t nl, nf, nb;
+        if (step > 0) {
+            double dt = step_dt(L1, h);
+            assert_int_equal(aqs_linkage_set_tolerance(L1, AQS_METRIC_REL_JOINT, 1.0 / 8), AQS_OK);
+            assert_int_equal(aqs_linkage_set_tolerance(L2, AQS_METRIC_REL_JOINT, 1.0 / 8), AQS_OK);
+            assert_int_equal(aqs_linkage_step(L1, dt), AQS_OK);
+            assert_int_equal(aqs_linkage_step(L2, dt), AQS_OK);
+        }
+        nl = query_once(L1, AQS_COLLIDE_LAZY, lazy);
+        assert_int_equal(aqs_linkage_get_collision_stats(L1, NULL, &vt, NULL, NULL), AQS_OK);
+        if (step > 0) {
+            vt_lazy += vt;
+            reused += L1->col->certs_reused;
+            made_later += L1->col->certs_made;
+            near += L1->col->near_tests;
+        }
+        nf = query_once(L2, AQS_COLLIDE_FULL, other);
+        assert_int_equal(aqs_linkage_get_collision_stats(L2, NULL, &vt, NULL, NULL), AQS_OK);
+        if (step > 0) vt_full += vt;
+        same_contacts(lazy, nl, other, nf);
+        nb = query_once(L2, AQS_COLLIDE_BRUTE, other);
+        same_contacts(lazy, nl, other, nb);
+        contacts += (long)nl;
+    }
+    print_message("%d bodies, %d steps of %g: %ld contacts, certificates reused %ld, made after the "
+                  "first query %ld, near pairs re-tested %ld, sphere tests lazy %ld / full %ld\n",
+                  (int)n, steps, h, contacts, reused, made_later, near, vt_lazy, vt_full);
+    assert_true(contacts > steps);
+    assert_true(reused > 10 * made_later);
+    assert_true(made_later > 0);
+    assert_true(near > 0);
+    assert_true(10 * vt_lazy < vt_full);
+    free(lazy);
+    free(other);
+    aqs_linkage_destroy(L1);
+    aqs_linkage_destroy(L2);
+    free_scene(&S1);
+    free_scene(&S2);
+}
+
+static void test_certificates_small_steps(void **state)
+{
+    certificates_small_steps(400, 301, 1e-4, 150);
+    certificates_small_steps(2000, 302, 1e-4, 40);
+}
+
+/* A chain of 8 bodies 1 apart along x, a sphere of radius 0.3 on each,
+ * revolute joints about z: contact-free when straight. */
+static aqs_linkage *straight_chain(void)
+{
+    aqs_linkage *L = test_new_linkage();
+    const double q1[4] = {1, 0, 0, 0}, sz[3] = {0.3, 0, 0}, at[3] = {0, 0, 0};
+    int32_t b;
+    for (b = 0; b < 8; b++) {
+        (void)test_add_joint(L, AQS_JOINT_REVOLUTE, b - 1, test_add_body(L, 1.0, 0.2, 0, 0, 0.1),
+                             b ? 1.0 : 0.0, 0, 0, 0, 0, 1);
+        assert_int_equal(aqs_shape_add(L, b, AQS_SHAPE_SPHERE, sz, at, q1, NULL), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    return L;
+}
+
+/* Lazy query into buf (sorted), compared with brute force. */
+static size_t lazy_equals_brute(aqs_linkage *L, aqs_contact *buf, aqs_contact *bf)
+{
+    size_t nl = query_once(L, AQS_COLLIDE_LAZY, buf);
+    int32_t made = L->col->certs_made, reused = L->col->certs_reused, near = L->col->near_tests;
+    size_t nb = query_once(L, AQS_COLLIDE_BRUTE, bf);
+    same_contacts(buf, nl, bf, nb);
+    L->col->certs_made = made; /* the caller reads the lazy query's */
+    L->col->certs_reused = reused;
+    L->col->near_tests = near;
+    return nl;
+}
+
+static int has_pair(const aqs_contact *c, size_t n, int32_t a, int32_t b)
+{
+    size_t k;
+    for (k = 0; k < n; k++)
+        if (c[k].body_a == a && c[k].body_b == b) return 1;
+    return 0;
+}
+
+/* Small moves of joint 4 (certificates reused) and wiggles of the small
+ * joints around it, then (b) a jump of joint 4 by 3 rad folding bodies 5..7
+ * back onto 3..1: the certificates above it are invalidated and the new
+ * contacts found; (c) a filter change and a FULL query drop every
+ * certificate; the lazy query equals brute force throughout. */
+static void test_certificates_jump_filters_full(void **state)
+{
+    aqs_linkage *L = straight_chain();
+    aqs_contact *buf = calloc(64, sizeof(aqs_contact)), *bf = calloc(64, sizeof(aqs_contact));
+    int32_t k, reused = 0;
+    size_t nl;
+    double q;
+    assert_int_equal(lazy_equals_brute(L, buf, bf), 0);
+    for (k = 1; k <= 5; k++) {
+        q = 0.002 * k;
+        assert_int_equal(aqs_joint_set_position(L, 4, &q, 1), AQS_OK);
+        assert_int_equal(lazy_equals_brute(L, buf, bf), 0);
+        reused += L->col->certs_reused;
+        assert_int_equal(L->col->certs_made, 0);
+    }
+    assert_true(reused > 0);
+    /* (b) the jump */
+    q = 3.0;
+    assert_int_equal(aqs_joint_set_position(L, 4, &q, 1), AQS_OK);
+    nl = lazy_equals_brute(L, buf, bf);
+    assert_true(L->col->certs_made > 0);
+    assert_true(has_pair(buf, nl, 1, 7) && has_pair(buf, nl, 2, 6) && has_pair(buf, nl, 3, 5));
+    /* small moves again: the new certificates are reused, contacts found */
+    for (k = 1; k <= 3; k++) {
+        q = 3.0 + 0.001 * k;
+        assert_int_equal(aqs_joint_set_position(L, 4, &q, 1), AQS_OK);
+        assert_int_equal(lazy_equals_brute(L, buf, bf), nl);
+        assert_true(L->col->certs_reused > 0);
+        assert_true(L->col->near_tests >= 3);
+    }
+    /* (c) filters: body 5 collides with nothing, then with everything again.
+     * Each change forgets the certificates (their near lists were filtered). */
+    assert_true(certified(L) > 0);
+    assert_int_equal(aqs_body_set_collision_filter(L, 5, 1u, 0u), AQS_OK);
+    assert_int_equal(certified(L), 0);
+    assert_int_equal(lazy_equals_brute(L, buf, bf), nl - 1);
+    assert_true(certified(L) > 0);
+    q = 3.0 + 0.004;
+    assert_int_equal(aqs_joint_set_position(L, 4, &q, 1), AQS_OK);
+    assert_int_equal(lazy_equals_brute(L, buf, bf), nl - 1); /* certificates without (3, 5) */
+    assert_true(L->col->certs_reused > 0);
+    assert_int_equal(aqs_body_set_collision_filter(L, 5, 1u, 0xFFFFFFFFu), AQS_OK);
+    assert_int_equal(certified(L), 0);
+    assert_int_equal(lazy_equals_brute(L, buf, bf), nl);
+    assert_true(has_pair(buf, nl, 3, 5));
+    assert_int_equal(aqs_collision_exclude_pair(L, 3, 5), AQS_OK);
+    assert_int_equal(certified(L), 0);
+    assert_int_equal(lazy_equals_brute(L, buf, bf), nl - 1);
+    /* FULL: a query from scratch, which drops the certificates */
+    assert_true(certified(L) > 0);
+    assert_int_equal(query_once(L, AQS_COLLIDE_FULL, bf), nl - 1);
+    assert_int_equal(L->col->certs_reused, 0);
+    assert_int_equal(L->col->certs_made, 0);
+    assert_int_equal(certified(L), 0);
+    q = 3.0 + 0.005;
+    assert_int_equal(aqs_joint_set_position(L, 4, &q, 1), AQS_OK);
+    assert_int_equal(lazy_equals_brute(L, buf, bf), nl - 1);
+    assert_int_equal(L->col->certs_reused, 0);
+    assert_true(L->col->certs_made > 0);
+    free(buf);
+    free(bf);
+    aqs_linkage_destroy(L);
+}
+
+/* (d) The near-list pool full: on a random 400-body scene whose certificates
+ * need over 300 near pairs, the pool is cut to 3/4 of that (its buffers keep
+ * their size): certifications that do not fit are not made, and lists that do not
+ * fit in half the pool are dropped at compaction. The lazy query still
+ * equals brute force at every step; certificates are made and reused where
+ * they fit, never all of them. */
+static void test_certificates_pool_full(void **state)
+{
+    scene S;
+    aqs_linkage *L = build(&S, 400, 303, 0);
+    aqs_contact *lazy = calloc(LAZY_CAP, sizeof(aqs_contact)), *bf = calloc(LAZY_CAP, sizeof(aqs_contact));
+    long reused = 0, made = 0;
+    int32_t step, all, need, cap;
+    (void)query_once(L, AQS_COLLIDE_LAZY, lazy);
+    all = certified(L);
+    need = L->col->np.used;
+    assert_true(need > 300);
+    cap = L->col->np.cap = need * 3 / 4;
+    L->col->np.used = 0;
+    memset(L->col->cert, 0, (size_t)L->t.nnodes);
+    for (step = 0; step < 60; step++) {
+        size_t nl, nb;
+        int32_t n, live = 0;
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, step % 10 == 0 ? 0.0 : 1.0 / 8),
+                         AQS_OK);
+        assert_int_equal(aqs_linkage_step(L, step_dt(L, step % 10 == 0 ? 0.02 : 1e-4)), AQS_OK);
+        nl = query_once(L, AQS_COLLIDE_LAZY, lazy);
+        reused += L->col->certs_reused;
+        made += L->col->certs_made;
+        for (n = 0; n < L->t.nnodes; n++)
+            if (L->col->cert[n]) live += L->col->ncnt[n];
+        assert_true(live <= L->col->np.used && L->col->np.used <= cap / 2);
+        assert_true(certified(L) < all);
+        nb = query_once(L, AQS_COLLIDE_BRUTE, bf);
+        same_contacts(lazy, nl, bf, nb);
+    }
+    print_message("near-list pool of %d pairs (%d needed): certificates made %ld, reused %ld\n", (int)cap,
+                  (int)need, made, reused);
+    assert_true(made > 0);
+    assert_true(reused > 0);
+    free(lazy);
+    free(bf);
+    aqs_linkage_destroy(L);
+    free_scene(&S);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -710,6 +936,9 @@ int main(void)
         cmocka_unit_test(test_adaptive_refit_is_local),
         cmocka_unit_test(test_idle_query_refits_nothing),
         cmocka_unit_test(test_cache_overflow),
+        cmocka_unit_test(test_certificates_small_steps),
+        cmocka_unit_test(test_certificates_jump_filters_full),
+        cmocka_unit_test(test_certificates_pool_full),
     };
     return cmocka_run_group_tests_name("broadphase", tests, NULL, NULL);
 }
