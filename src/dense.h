@@ -80,14 +80,6 @@ void dense_cholesky6_lower_solve(const double *C, const double *b, double *w, in
 /* Solve C^T v = w (backward), same layout. */
 void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, int n);
 
-/* Householder QR of the m x n row-major matrix A, in place: on return the
- * first min(m, n) rows hold the upper-trapezoidal R (entries below the
- * diagonal zeroed); the other rows are garbage. Returns min(m, n). */
-int dense_qr_r(double *A, int m, int n);
-/* The same for a column-major A (column j at A + j m): the columns the
- * reflections sweep are contiguous. R is left in the first min(m, n) rows
- * (upper part of each column); entries below the diagonal are zeroed. */
-int dense_qr_r_colmajor(double *A, int m, int n);
 /* QR update by rows. R (n x n, row-major) holds rows at the positions j
  * with present[j] != 0, each zero left of column j (an upper-triangular
  * matrix with rows missing); D is p x n column-major (column j at D + j p).
