@@ -300,28 +300,48 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     return 0;
 }
 
-void dca_form_W(const aqs_linkage *L, int32_t n, double W[36])
+/* M W g = M V g - M V S (U g) = Y (C^{-1} g) - ZD (V S)^T g, from the
+ * products dca_node_update left in the scratch: Y = M C^{-T} (6nh x 6) and
+ * ZD = M V S D^{-1} (6nh x d). */
+void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out)
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const double *U = t->data + C->U, *VS = t->data + C->VS;
-    int i, j, k;
-    if (C->d == 6) {
-        memset(W, 0, 36 * sizeof(double));
+    const double *Y = t->scratch, *ZD = t->scratch + 72 * C->nh, *VS = t->data + C->VS;
+    const int32_t rows = 6 * C->nh, d = C->d;
+    double u[6], v[6];
+    int32_t i, k;
+    if (d == 6) {
+        for (i = 0; i < rows; i++) out[i] = 0.0;
         return;
     }
-    dense_cholesky6_inverse(t->data + C->W, W); /* V */
-    if (C->d == 1) {
-        for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) W[6 * i + j] -= VS[i] * U[j];
+    lower_solve_row6(t->data + C->W, g, u);
+    for (k = 0; k < d; k++) {
+        double s = 0.0;
+        for (i = 0; i < 6; i++) s += VS[i * d + k] * g[i];
+        v[k] = s;
+    }
+    for (i = 0; i < rows; i++) {
+        const double *y = Y + 6 * i, *zd = ZD + (int64_t)i * d;
+        double s = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5];
+        for (k = 0; k < d; k++) s -= zd[k] * v[k];
+        out[i] = s;
+    }
+}
+
+/* (U M^T)_{r,i} = (M V S D^{-1})_{i,r} = ZD_{i,r} (U = D^{-1} (V S)^T, D
+ * symmetric); a free joint has U = I: M's column r. */
+void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
+{
+    const tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const int32_t rows = 6 * C->nh, d = C->d;
+    int32_t i;
+    if (d == 6) {
+        for (i = 0; i < rows; i++) out[i] = t->mscratch[6 * i + r];
         return;
     }
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double s = 0.0;
-            for (k = 0; k < C->d; k++) s += VS[i * C->d + k] * U[k * 6 + j];
-            W[6 * i + j] -= s;
-        }
+    for (i = 0; i < rows; i++) out[i] = t->scratch[72 * C->nh + (int64_t)i * d + r];
 }
 
 void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])

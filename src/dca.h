@@ -21,8 +21,12 @@ int dca_node_update(aqs_linkage *L, int32_t n);
 /* out = W h for internal node n (W = V - V S U, applied through the stored
  * Cholesky factor of T; zero for a free joint). */
 void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6]);
-/* W = V - V S U of internal node n as a 6x6 matrix (for many products). */
-void dca_form_W(const aqs_linkage *L, int32_t n, double W[36]);
+/* Right after dca_node_update(L, n), from the products it left in the
+ * scratch (valid until the next node update): out (6 nh) = M W g for a
+ * 6-vector g, i.e. the handle part of g^T [W M^T], without forming W. */
+void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out);
+/* Right after dca_node_update(L, n): out (6 nh) = row r < d of U M^T. */
+void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces. */

@@ -71,9 +71,9 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
         }
     }
     tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
-    /* the reflected rows (column-major, at most 6 + 6 + 6) and the node's
-     * factor unpacked (cmax x cmax) */
-    scratch = lk_calloc(L, (size_t)(cmax + 18) * (size_t)cmax, sizeof(double));
+    /* the reflected rows (column-major, at most 6 + 6 + 6), the node's
+     * factor unpacked (cmax x cmax) and one row of M W (cmax) */
+    scratch = lk_calloc(L, (size_t)(cmax + 19) * (size_t)cmax, sizeof(double));
     perm = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(int32_t));
     /* posC, mapA, mapB (nh each) and the present rows (cols) */
     iscratch = lk_calloc(L, 3 * (size_t)t->max_handles + (size_t)cmax + 3, sizeof(int32_t));
@@ -115,18 +115,17 @@ void totalacc_free(aqs_linkage *L)
 
 /* Row r of the column-major D (leading dimension ld) += g^T F for
  * F = [W M^T, gamma]: C's handle c (block pos[c] of T's order) gets
- * M_c (W g), the constant g . gamma. */
-static void add_gF(const double *W, const double *g, const double *M, const double *gamma,
-                   const int32_t *pos, int32_t nh, double *D, int64_t ld, int32_t r)
+ * M_c W g (dca_mw_apply, from the node update's products), the constant
+ * g . gamma. */
+static void add_gF(const aqs_linkage *L, int32_t n, const double *g, const double *gamma,
+                   const int32_t *pos, int32_t nh, double *D, int64_t ld, int32_t r, double *mw)
 {
-    double w[6], tmp[6];
     int32_t c, i;
     double s = 0.0;
-    dense_matvec6(W, g, w);
+    dca_mw_apply(L, n, g, mw);
     for (c = 0; c < nh; c++) {
         double *col = D + (int64_t)6 * pos[c] * ld + r;
-        dense_matvec6(M + 36 * c, w, tmp);
-        for (i = 0; i < 6; i++) col[i * ld] += tmp[i];
+        for (i = 0; i < 6; i++) col[i * ld] += mw[6 * c + i];
     }
     for (i = 0; i < 6; i++) s += g[i] * gamma[i];
     D[(int64_t)6 * nh * ld + r] += s;
@@ -223,8 +222,6 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    /* M of this node, left in the scratch by dca_node_update just before */
-    const double *U = t->data + C->U, *M = t->mscratch;
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     const pose *J = t->poses + C->J;
     const int32_t *permC = t->tperm + C->handles;
@@ -235,11 +232,12 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     int32_t *posC = t->tiscratch, *mapA = posC + nh, *mapB = mapA + A->nh, *present = mapB + B->nh;
     int32_t *rowpos = t->trowpos + C->tpos;
     double *D = t->tscratch; /* the reflected rows, column-major, leading dimension p */
-    double *R = D + (int64_t)18 * (6 * t->max_handles + 1); /* C's factor, unpacked */
+    const int64_t cmax = 6 * (int64_t)t->max_handles + 1;
+    double *R = D + 18 * cmax; /* C's factor, unpacked */
+    double *mw = R + cmax * cmax; /* M W g, or a row of U M^T (dca.c) */
     double *T = t->tdata + C->T;
     const int32_t *posA = row_starts(t, C->a), *posB = row_starts(t, C->b);
     int64_t offA = 0, offB = 0, off;
-    double W[36];
 
     C->trows = 0;
     if (A->trows + B->trows + kd == 0) return;
@@ -249,7 +247,6 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     memset(D, 0, sizeof(double) * (size_t)p * (size_t)cols);
     memset(R, 0, sizeof(double) * (size_t)cols * (size_t)cols);
     memset(present, 0, sizeof(int32_t) * (size_t)cols);
-    if (da + db > 0) dca_form_W(L, n, W); /* once for all the rows: each row needs W g */
 
     /* T_A E_A: -(T_A)_k X^T F added to the rows starting in block k (the row
      * g^T = (T_A)_k X^T is X applied to (T_A)_k); the others are copied. */
@@ -261,7 +258,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         offA += 6 * A->nh + 1 - posA[r];
         spatial_xform_motion(J, k, g);
         for (i = 0; i < 6; i++) g[i] = -g[i];
-        add_gF(W, g, M, gamma, posC, nh, D, p, row);
+        add_gF(L, n, g, gamma, posC, nh, D, p, row, mw);
     }
     /* T_B E_B */
     for (r = 0; r < db; r++, row++) {
@@ -270,15 +267,14 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         copy_child_row(tr, posB[r], B->nh, mapB, cols, D + row, p);
         joined_block(tr, posB[r], k);
         offB += 6 * B->nh + 1 - posB[r];
-        add_gF(W, k, M, gamma, posC, nh, D, p, row);
+        add_gF(L, n, k, gamma, posC, nh, D, p, row, mw);
     }
     /* K = [-U M^T, rho] */
     for (r = 0; r < kd; r++, row++) {
-        double tmp[6];
+        dca_um_row(L, n, r, mw);
         for (c = 0; c < nh; c++) {
             double *col = D + (int64_t)6 * posC[c] * p + row;
-            dense_matvec6(M + 36 * c, U + 6 * r, tmp);
-            for (i = 0; i < 6; i++) col[i * p] = -tmp[i];
+            for (i = 0; i < 6; i++) col[i * p] = -mw[6 * c + i];
         }
         D[(int64_t)(cols - 1) * p + row] = rho[r];
     }
