@@ -242,6 +242,74 @@ int dense_spd_inverse(const double *A, double *out, int n)
     return 0;
 }
 
+/* Apply H = I - tau v v^T, v = [1; a] (a: m entries), to ncols columns:
+ * column c's pivot entry is t[c ts], its other entries x[c xs .. c xs + m).
+ * The usual lengths (m <= 6) have their own fully unrolled loops, with v
+ * in registers. */
+#define REFLECT_FIXED(M)                                                            \
+    static void reflect_##M(const double *a, double tau, double *t, long ts,        \
+                            double *x, long xs, int ncols)                          \
+    {                                                                               \
+        double v[M];                                                                \
+        int c, i;                                                                   \
+        for (i = 0; i < M; i++) v[i] = a[i];                                        \
+        for (c = 0; c < ncols; c++, t += ts, x += xs) {                             \
+            double sum = *t, f;                                                     \
+            for (i = 0; i < M; i++) sum += v[i] * x[i];                             \
+            f = tau * sum;                                                          \
+            *t -= f;                                                                \
+            for (i = 0; i < M; i++) x[i] -= f * v[i];                               \
+        }                                                                           \
+    }
+REFLECT_FIXED(1)
+REFLECT_FIXED(2)
+REFLECT_FIXED(3)
+REFLECT_FIXED(4)
+REFLECT_FIXED(5)
+REFLECT_FIXED(6)
+#undef REFLECT_FIXED
+
+static void reflect_columns(const double *a, int m, double tau, double *t, long ts, double *x,
+                            long xs, int ncols)
+{
+    int c, i;
+    switch (m) {
+    case 0: /* v = [1]: H scales the pivot by 1 - tau */
+        for (c = 0; c < ncols; c++) t[c * ts] *= 1.0 - tau;
+        return;
+    case 1: reflect_1(a, tau, t, ts, x, xs, ncols); return;
+    case 2: reflect_2(a, tau, t, ts, x, xs, ncols); return;
+    case 3: reflect_3(a, tau, t, ts, x, xs, ncols); return;
+    case 4: reflect_4(a, tau, t, ts, x, xs, ncols); return;
+    case 5: reflect_5(a, tau, t, ts, x, xs, ncols); return;
+    case 6: reflect_6(a, tau, t, ts, x, xs, ncols); return;
+    default: break;
+    }
+    /* longer: two columns per pass over a */
+    for (c = 0; c + 1 < ncols; c += 2, t += 2 * ts, x += 2 * xs) {
+        double *x2 = x + xs, s1 = t[0], s2 = t[ts], f1, f2;
+        for (i = 0; i < m; i++) {
+            s1 += a[i] * x[i];
+            s2 += a[i] * x2[i];
+        }
+        f1 = tau * s1;
+        f2 = tau * s2;
+        t[0] -= f1;
+        t[ts] -= f2;
+        for (i = 0; i < m; i++) {
+            x[i] -= f1 * a[i];
+            x2[i] -= f2 * a[i];
+        }
+    }
+    if (c < ncols) {
+        double sum = *t, f;
+        for (i = 0; i < m; i++) sum += a[i] * x[i];
+        f = tau * sum;
+        *t -= f;
+        for (i = 0; i < m; i++) x[i] -= f * a[i];
+    }
+}
+
 int dense_qr_append(double *R, int n, int *present, double *D, int p)
 {
     int j, i, c, s = 0, rows = 0;
@@ -256,6 +324,16 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
         for (i = 0; i < q; i++)
             if (fabs(a[i]) > scale) scale = fabs(a[i]);
         if (scale == 0.0) { rows += pr != 0; continue; }
+        if (!pr && q == 1) {
+            /* the last live row, alone in column j: it becomes R's row j as is
+             * (dlarfg's tau = 0 when nothing is below the pivot) */
+            for (c = j + 1; c < n; c++) rj[c] = D[(long)c * p + s];
+            rj[j] = a[0];
+            present[j] = 1;
+            s++;
+            rows++;
+            continue;
+        }
         top = pr ? rj[j] : a[0];
         if (fabs(top) > scale) scale = fabs(top);
         i0 = pr ? 0 : 1;
@@ -274,34 +352,11 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
             const double iv = 1.0 / v0;
             for (i = i0; i < q; i++) a[i] *= iv;
         }
-        {
-            /* t: the pivot entry of column c (R's row j, or D's first live
-             * row), x: the rest; two columns per pass over a */
-            const double *ai = a + i0;
-            int qi = q - i0;
-            for (c = j + 1; c + 1 < n; c += 2) {
-                double *b1 = D + (long)c * p + s, *b2 = b1 + p;
-                double *t1 = pr ? rj + c : b1, *t2 = pr ? rj + c + 1 : b2;
-                double s1 = *t1, s2 = *t2, f1, f2;
-                const double *x1 = b1 + i0, *x2 = b2 + i0;
-                for (i = 0; i < qi; i++) { s1 += ai[i] * x1[i]; s2 += ai[i] * x2[i]; }
-                f1 = tau * s1; f2 = tau * s2;
-                *t1 -= f1; *t2 -= f2;
-                for (i = 0; i < qi; i++) { b1[i0 + i] -= f1 * ai[i]; b2[i0 + i] -= f2 * ai[i]; }
-                if (!pr) { rj[c] = *t1; rj[c + 1] = *t2; }
-            }
-            for (; c < n; c++) {
-                double *b1 = D + (long)c * p + s, *t1 = pr ? rj + c : b1, s1 = *t1, f1;
-                const double *x1 = b1 + i0;
-                for (i = 0; i < qi; i++) s1 += ai[i] * x1[i];
-                f1 = tau * s1;
-                *t1 -= f1;
-                for (i = 0; i < qi; i++) b1[i0 + i] -= f1 * ai[i];
-                if (!pr) rj[c] = *t1;
-            }
-        }
+        if (pr) reflect_columns(a + i0, q - i0, tau, rj + j + 1, 1, D + (long)(j + 1) * p + s + i0, p, n - j - 1);
+        else reflect_columns(a + 1, q - 1, tau, D + (long)(j + 1) * p + s, p, D + (long)(j + 1) * p + s + 1, p, n - j - 1);
         if (!pr) {
-            for (c = 0; c < j; c++) rj[c] = 0.0;
+            /* D's first live row becomes R's row j (zero left of j already) */
+            for (c = j + 1; c < n; c++) rj[c] = D[(long)c * p + s];
             present[j] = 1;
             s++;
         }

@@ -82,7 +82,7 @@ void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, in
 
 /* QR update by rows. R (n x n, row-major) holds rows at the positions j
  * with present[j] != 0, each zero left of column j (an upper-triangular
- * matrix with rows missing); D is p x n column-major (column j at D + j p).
+ * matrix with rows missing; the missing rows are zero); D is p x n column-major (column j at D + j p).
  * On return R holds the R factor of [R; D] in the same form, so that the sum
  * of r_j r_j^T over the present rows grows by D^T D: a reflection over R's
  * row j (if present) and D's live rows zeroes D's column j; where row j is
