@@ -364,6 +364,26 @@ AQS_API aqs_status aqs_linkage_set_exact_fallback(aqs_linkage *linkage, double f
  *  AQS_OK, AQS_EINVAL (NULL). */
 AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, double *fraction);
 
+/** Prediction: a joint whose node's total acceleration A(C) exceeded
+ *  margin x the largest A left queued when the last adaptive solve stopped
+ *  is certain to be needed again after a step (A moves little), so the next
+ *  solve computes those joints (a set closed towards the root) without
+ *  evaluating their A, and the update after the step skips their
+ *  total-acceleration factors (aqs_solve_stats.nodes_predicted,
+ *  factors_updated). The bound stays certified: every node left queued is
+ *  evaluated exactly, and a wrong prediction (loads changed a lot) only
+ *  computes more joints than needed for one solve. margin = 0 turns it off;
+ *  default AQS_PREDICTION_MARGIN (2^10: accelerations 32x the stopping
+ *  level). Unused with eps = 0 or a cap. Setting it, a tolerance or a joint
+ *  bound empties the predicted set. After finalize. Returns AQS_OK,
+ *  AQS_EINVAL (margin not finite, or in (0, 1); nothing changed),
+ *  AQS_ESTATE. */
+#define AQS_PREDICTION_MARGIN 1024.0
+AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *linkage, double margin);
+/** The margin of aqs_linkage_set_prediction into *margin. Returns AQS_OK,
+ *  AQS_EINVAL (NULL), AQS_ESTATE. */
+AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *linkage, double *margin);
+
 /** Refine the last solve down to a smaller eps (same measure) by continuing
  *  its priority queue instead of starting over. Valid only right after a
  *  solve or refine, before anything changes positions or loads; otherwise
@@ -386,6 +406,8 @@ typedef struct aqs_solve_stats {
     int32_t nodes_processed; /**< internal nodes back-substituted by the last solve */
     int32_t capped;          /**< 1 if the last solve stopped at the max_computed cap */
     int32_t fallback;        /**< 1 if the last solve was exact because of aqs_linkage_set_exact_fallback */
+    int32_t nodes_predicted; /**< internal nodes the last solve processed without evaluating their total acceleration (aqs_linkage_set_prediction) */
+    int32_t factors_updated; /**< total-acceleration factors recomputed, counted as nodes_updated */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

@@ -23,7 +23,15 @@ aqs_status adaptive_alloc(aqs_linkage *L)
     s->reached = lk_calloc(L, (size_t)L->m.ncomp + 2, sizeof(int32_t));
     s->heap_key = lk_calloc(L, n, sizeof(double));
     s->heap_item = lk_calloc(L, n, sizeof(int32_t));
-    if (!s->processed || !s->reached || !s->heap_key || !s->heap_item) return AQS_ENOMEM;
+    s->pred = lk_calloc(L, n, 1);
+    s->tstale = lk_calloc(L, n, 1);
+    s->aval = lk_calloc(L, n, sizeof(double));
+    s->plist = lk_calloc(L, n, sizeof(int32_t));
+    if (!s->processed || !s->reached || !s->heap_key || !s->heap_item || !s->pred || !s->tstale ||
+        !s->aval || !s->plist)
+        return AQS_ENOMEM;
+    s->npred = 0;
+    s->margin = AQS_PREDICTION_MARGIN;
     s->counted = 0;
     for (i = 0; i < L->m.ne; i++)
         if (L->joints[L->m.eff_joint[i]].type != AQS_JOINT_FREE) s->counted++;
@@ -39,8 +47,14 @@ void adaptive_free(aqs_linkage *L)
     lk_free(L, s->reached);
     lk_free(L, s->heap_key);
     lk_free(L, s->heap_item);
-    s->processed = s->reached = s->heap_item = NULL;
-    s->heap_key = NULL;
+    lk_free(L, s->pred);
+    lk_free(L, s->tstale);
+    lk_free(L, s->aval);
+    lk_free(L, s->plist);
+    s->processed = s->reached = s->heap_item = s->plist = NULL;
+    s->heap_key = s->aval = NULL;
+    s->pred = s->tstale = NULL;
+    s->npred = 0;
 }
 
 /* Uncomputed joints read as acceleration 0 and constraint force NaN. Undo
@@ -98,6 +112,7 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
     if (L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE) {
         double q = norm_qdd(L, n);
         s->computed++;
+        s->comp_sq += q * q;
         if (q > s->lower) s->lower = q;
     }
     for (i = 0; i < 2; i++) {
@@ -116,6 +131,7 @@ static void push(aqs_linkage *L, heap *h, int32_t n)
     solve_state *s = &L->s;
     double a = totalacc_eval(L, n);
     const node *nd = &L->t.nodes[n];
+    s->aval[n] = a;
     heap_push(h, a, n);
     s->sum += a;
     if (nd->ncount > 0) {
@@ -131,7 +147,12 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     const solve_state *s = &L->s;
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
-    case AQS_METRIC_REL_LINKAGE: return s->a_root > 0.0 ? sqrt(sum) / sqrt(s->a_root) : 0.0;
+    case AQS_METRIC_REL_LINKAGE: {
+        /* A(root) = the computed joints' squares + the queued A (every joint
+         * is in one or the other): used when the root's T was not updated */
+        double a_root = s->a_root >= 0.0 ? s->a_root : s->comp_sq + sum;
+        return a_root > 0.0 ? sqrt(sum) / sqrt(a_root) : 0.0;
+    }
     default: {
         /* joint-wise: the heap top, or the paper's sqrt of the sum */
         double b = s->joint_bound == AQS_JOINT_BOUND_SUM ? sum : top;
@@ -152,6 +173,86 @@ static double resum(const heap *h)
         sum = t;
     }
     return sum + c;
+}
+
+/* ------------------------------------------------------------ prediction
+ *
+ * A node whose A exceeded the margin times the largest A left queued when
+ * the solve stopped will be processed by the next solve too (A moves little
+ * in a step). The next solve processes such nodes (a top-closed set: A of a
+ * parent is at least its children's) without evaluating their A, like the
+ * nodes on the way to a free joint, and the updates before it skip their
+ * factors T. The bound stays certified: every node left queued is
+ * evaluated with a current T (its descendants are outside the set), and a
+ * wrong prediction only computes more joints than needed. */
+
+int adaptive_predict_usable(const aqs_linkage *L)
+{
+    const solve_state *s = &L->s;
+    return s->margin > 0.0 && s->eps > 0.0 && s->max_computed == 0;
+}
+
+void adaptive_predict_clear(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    int32_t i;
+    for (i = 0; i < s->npred; i++) {
+        int32_t n = s->plist[i];
+        if (s->tstale[n]) update_mark(L, n); /* its T is recomputed by the next update */
+        s->pred[n] = 0;
+    }
+    s->npred = 0;
+}
+
+/* The largest A a queued node can have when the solve stops at eps: one
+ * node above it keeps the solve going, whichever the measure. */
+static double stop_level(const solve_state *s, double eps)
+{
+    switch (s->metric) {
+    case AQS_METRIC_REL_JOINT: return eps * eps * s->lower * s->lower;
+    case AQS_METRIC_REL_LINKAGE: return eps * eps * (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
+    default: return eps * eps;
+    }
+}
+
+/* After a run to eps: A of the nodes processed without evaluation
+ * (children first: ||qdd_k||^2 plus the children's A), then the set for
+ * the next solve (parents first): the nodes above margin x the stopping
+ * level. Members leaving the set get their T back. */
+static void predict_next(aqs_linkage *L, double eps)
+{
+    solve_state *s = &L->s;
+    const tree *t = &L->t;
+    const double thr = s->margin * stop_level(s, eps);
+    int32_t i;
+    if (!adaptive_predict_usable(L)) {
+        adaptive_predict_clear(L);
+        return;
+    }
+    for (i = s->nprocessed - 1; i >= 0; i--) {
+        int32_t n = s->processed[i];
+        const node *nd = &t->nodes[n];
+        const int32_t child[2] = {nd->a, nd->b};
+        double a, q;
+        int k;
+        if (!(s->pred[n] || nd->forced)) continue; /* evaluated when pushed */
+        q = L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE ? norm_qdd(L, n) : 0.0;
+        a = q * q;
+        for (k = 0; k < 2; k++)
+            if (t->nodes[child[k]].joint >= 0) a += s->aval[child[k]];
+        s->aval[n] = a;
+    }
+    for (i = 0; i < s->nprocessed; i++) {
+        int32_t n = s->processed[i], p = t->nodes[n].parent;
+        if ((p < 0 || (s->pred[p] & 2)) && (t->nodes[n].forced || s->aval[n] >= thr)) s->pred[n] |= 2;
+    }
+    s->npred = 0;
+    for (i = 0; i < s->nprocessed; i++) {
+        int32_t n = s->processed[i];
+        if (s->pred[n] == 1 && s->tstale[n]) update_mark(L, n); /* leaves the set */
+        s->pred[n] >>= 1;
+        if (s->pred[n]) s->plist[s->npred++] = n;
+    }
 }
 
 static void run(aqs_linkage *L, heap *h, double eps)
@@ -184,6 +285,7 @@ static void run(aqs_linkage *L, heap *h, double eps)
         for (i = 0; i < nk; i++) push(L, h, kids[i]);
     }
     s->heap_size = h->size;
+    predict_next(L, eps);
 }
 
 /* A solve that computed every joint: no bound, nothing queued. */
@@ -214,6 +316,8 @@ void adaptive_solve(aqs_linkage *L)
     s->lower = 0.0;
     s->capped = 0;
     s->sum = 0.0;
+    s->comp_sq = 0.0;
+    s->npredicted = 0;
     s->valid = 0;
     if (t->nnodes == 0) { /* nothing moves */
         if (L->m.comp_welded[L->m.ncomp])
@@ -232,20 +336,24 @@ void adaptive_solve(aqs_linkage *L)
         heap h;
         int32_t stack_top = 0;
         heap_init(&h, s->heap_key, s->heap_item, t->nnodes);
-        s->a_root = totalacc_eval(L, t->root);
+        /* A(root) from its factor, unless the prediction skipped it (then
+         * from the computed and queued joints, bound_of) */
+        s->a_root = s->tstale[t->root] ? -1.0 : totalacc_eval(L, t->root);
         /* Nodes on the way to a free joint are always computed: the floating
-         * base's acceleration is not part of the approximation (§3.7). They
-         * are processed first, parents before children, using the heap's
-         * item array from its far end as a stack. */
-        if (t->nodes[t->root].forced) {
+         * base's acceleration is not part of the approximation (§3.7); so
+         * are the predicted ones. They are processed first, parents before
+         * children, using the heap's item array from its far end as a
+         * stack. */
+        if (t->nodes[t->root].forced || s->pred[t->root]) {
             int32_t *st = s->heap_item + t->nnodes; /* grows downwards */
             st[-(++stack_top)] = t->root;
             while (stack_top > 0) {
                 int32_t nk;
                 n = st[-(stack_top--)];
                 nk = process(L, n, kids);
+                if (s->pred[n]) s->npredicted++;
                 for (i = 0; i < nk; i++) {
-                    if (t->nodes[kids[i]].forced) st[-(++stack_top)] = kids[i];
+                    if (t->nodes[kids[i]].forced || s->pred[kids[i]]) st[-(++stack_top)] = kids[i];
                     else push(L, &h, kids[i]);
                 }
             }

@@ -16,6 +16,12 @@ void adaptive_solve(aqs_linkage *L);
 void adaptive_mark_exact(aqs_linkage *L);
 /* Continue the last adaptive solve down to a smaller eps. */
 void adaptive_refine(aqs_linkage *L, double eps);
+/* Whether the next solve may use the predicted set (margin > 0, eps > 0,
+ * no cap). */
+int adaptive_predict_usable(const aqs_linkage *L);
+/* Empty the predicted set; its members' skipped factors are marked for the
+ * next update. */
+void adaptive_predict_clear(aqs_linkage *L);
 /* q <- q (+) h qdd for the computed joints; refresh the moved nodes' frames
  * and mark them stale. */
 void adaptive_integrate(aqs_linkage *L, double h);

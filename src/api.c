@@ -632,6 +632,8 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
     int fb = fallback_applies(L) && L->fb_left > 0;
     L->exact_by_aba = 0;
     L->fb_last = 0;
+    /* the predicted set is for an adaptive solve by the heap only */
+    if (exact_by_aba(L) || fb || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
     if (exact_by_aba(L) || fb) {
         if ((st = aba_solve(L)) != AQS_OK) {
             L->solved = 0;
@@ -704,13 +706,14 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
 {
     static const char fn[] = "aqs_linkage_step";
     aqs_status st;
-    int32_t before;
+    int32_t before, before_f;
     CHECK_LINKAGE(L);
     if ((st = need_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
     if ((st = solve(L, fn)) != AQS_OK) return st;
     before = L->t.nodes_updated; /* what the solve's update recomputed (loads changed since) */
+    before_f = L->t.factors_updated;
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
     st = check_moved_positions(L, fn);
@@ -719,7 +722,10 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
      * articulated-body solve does not need them, an adaptive one recomputes
      * them first. */
     if (st == AQS_OK && !L->exact_by_aba) st = update_coefficients(L);
-    if (st == AQS_OK) L->t.nodes_updated += before;
+    if (st == AQS_OK) {
+        L->t.nodes_updated += before;
+        L->t.factors_updated += before_f;
+    }
     if (st != AQS_OK) {
         /* Undo: back to the positions before the step, which solved fine. */
         char msg[sizeof L->error];
@@ -752,6 +758,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     L->s.eps = eps;
     L->s.valid = 0;
     L->fb_left = 0;
+    adaptive_predict_clear(L); /* made for the former measure */
     return AQS_OK;
 }
 
@@ -794,6 +801,32 @@ AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *cL, double 
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *L, double margin)
+{
+    static const char fn[] = "aqs_linkage_set_prediction";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if (!isfinite(margin) || (margin != 0.0 && margin < 1.0))
+        return lk_fail(L, AQS_EINVAL, "%s: margin = %g must be 0 (off) or a finite number >= 1", fn,
+                       margin);
+    L->s.margin = margin;
+    adaptive_predict_clear(L);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *cL, double *margin)
+{
+    static const char fn[] = "aqs_linkage_get_prediction";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    CHECK_PTR(L, fn, margin);
+    *margin = L->s.margin;
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
 {
     static const char fn[] = "aqs_linkage_set_joint_bound";
@@ -804,6 +837,7 @@ AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
         return lk_fail(L, AQS_EINVAL, "%s: kind = %d is not an AQS_JOINT_BOUND_* value", fn, (int)kind);
     L->s.joint_bound = kind;
     L->s.valid = 0;
+    adaptive_predict_clear(L);
     return AQS_OK;
 }
 
@@ -851,6 +885,8 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.nodes_processed = L->s.nprocessed;
     full.capped = L->s.capped;
     full.fallback = L->fb_last;
+    full.nodes_predicted = L->s.all ? 0 : L->s.npredicted;
+    full.factors_updated = L->t.factors_updated;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }

@@ -73,6 +73,7 @@ typedef struct {
     int32_t ndirty;
     int all_dirty;
     int32_t nodes_updated; /* by the last update */
+    int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -127,6 +128,16 @@ typedef struct {
     int32_t counted;      /* counted joints in the linkage */
     double bound;         /* certified bound of the last solve */
     int capped;           /* stopped by max_computed */
+    /* Prediction (adaptive.c): nodes the next solve processes without
+     * evaluating A, so the updates before it skip their factors T. */
+    double margin;          /* aqs_linkage_set_prediction; 0 = off */
+    unsigned char *pred;    /* nnodes: in the predicted set (top-closed) */
+    unsigned char *tstale;  /* nnodes: T not recomputed since the node moved (only in pred) */
+    double *aval;           /* nnodes: A of the node at its last push, or summed (forced) */
+    int32_t *plist;         /* the npred members of pred */
+    int32_t npred;
+    int32_t npredicted;     /* nodes the last solve processed because they were predicted */
+    double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/aba.c): scratch

@@ -204,7 +204,16 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
-    if (L->t.tdata) totalacc_node_update(L, n);
+    if (L->t.tdata) {
+        solve_state *s = &L->s;
+        if (s->pred && s->pred[n]) {
+            s->tstale[n] = 1; /* processed next without its A (adaptive.c) */
+        } else {
+            totalacc_node_update(L, n);
+            if (s->tstale) s->tstale[n] = 0;
+            L->t.factors_updated++;
+        }
+    }
     return AQS_OK;
 }
 
@@ -214,6 +223,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     aqs_status st = AQS_OK;
     int32_t k;
     if (t->nnodes == 0) return AQS_OK;
+    t->factors_updated = 0;
     if (t->all_dirty) {
         L->loads_dirty = L->gravity_dirty = 1;
         update_loads(L); /* marks are superseded by the full pass */

@@ -166,6 +166,12 @@ def test_error_is_bounded(name, metric, k):
         check_solution(L, name, stats, metric)
 
 
+def same_solve(a, b):
+    """Two SolveStats equal but for what the prediction changes."""
+    skip = {"nodes_predicted": 0, "factors_updated": 0}
+    return dataclasses.replace(a, **skip) == dataclasses.replace(b, **skip)
+
+
 @pytest.mark.parametrize("metric", ["abs_joint", "rel_joint"])
 @pytest.mark.parametrize("name", list(CASES))
 def test_joint_bound_sum(name, metric):
@@ -182,7 +188,8 @@ def test_joint_bound_sum(name, metric):
             check_solution(total, name, by_sum, metric)
             assert by_sum.computed_joints >= by_top.computed_joints
         total.set_joint_bound(aqs.JOINT_BOUND_HEAP_TOP)
-        assert total.solve() == top.solve()
+        # top solves the same state again: it predicts, total starts over
+        assert same_solve(total.solve(), top.solve())
         for other in ("abs_linkage", "rel_linkage"):
             top.set_tolerance(other, 2.0 ** -5)
             total.set_tolerance(other, 2.0 ** -5)
@@ -290,6 +297,38 @@ def test_exact_fallback():
         assert not L.solve().fallback  # the probe
         L.set_exact_fallback(0.0)
         assert not any(L.solve().fallback for _ in range(2 * aqs.FALLBACK_RUN))
+
+
+@pytest.mark.parametrize("metric", METRICS)
+@pytest.mark.parametrize("name", ["chain-300-tip-load", "tree-200-floating-local-load"])
+def test_prediction(name, metric):
+    """set_prediction (on by default): a second solve at the same state
+    computes the joints the first one needed by far without evaluating
+    theirs; its joints equal the exact ones, its bound holds and it computes
+    the same joints as the first; bad margins raise and change nothing;
+    margin 0 predicts nothing; steps skip factors."""
+    case, _, _ = exact(name)
+    with build(aqs, case) as L:
+        assert L.prediction == aqs.PREDICTION_MARGIN
+        for bad in (NAN, INF, -1.0, 0.5):
+            with pytest.raises(aqs.InvalidArgument, match="margin"):
+                L.set_prediction(bad)
+        assert L.prediction == aqs.PREDICTION_MARGIN
+        L.set_tolerance(metric, 2.0 ** -20)
+        first = L.solve()
+        assert first.nodes_predicted == 0
+        first_computed = check_solution(L, name, first, metric)
+        second = L.solve()
+        assert second.nodes_predicted > 0
+        assert check_solution(L, name, second, metric) == first_computed
+        L.set_prediction(0.0)
+        assert L.prediction == 0.0
+        assert L.solve().nodes_predicted == 0
+        L.set_prediction(64.0)
+        L.step(1e-3)
+        stats = L.step(1e-3)
+        assert stats.nodes_predicted > 0
+        assert stats.factors_updated < stats.nodes_updated
 
 
 def test_nothing_moves():
@@ -508,8 +547,9 @@ def test_adaptive_step_moves_only_computed_joints():
 
 def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
-             "nodes_updated", "nodes_processed", "capped", "fallback"]
-    types = [str, float, float, int, int, int, int, bool, bool]
+             "nodes_updated", "nodes_processed", "capped", "fallback", "nodes_predicted",
+             "factors_updated"]
+    types = [str, float, float, int, int, int, int, bool, bool, int, int]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -543,7 +583,7 @@ def test_stats_struct_size_is_honoured():
             partial = _lib.aqs_solve_stats(size=size, metric=-7, eps=-7.0, error_bound=-7.0,
                                            computed_joints=-7, counted_joints=-7,
                                            nodes_updated=-7, nodes_processed=-7, capped=-7,
-                                           fallback=-7)
+                                           fallback=-7, nodes_predicted=-7, factors_updated=-7)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:

@@ -122,8 +122,8 @@ def test_structs_match(header):
         fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
         mirror = STRUCTS[tag]
         assert [(n, FIELD_TYPES[t]) for t, n in fields] == list(mirror._fields_), tag
-    # The C layout with natural alignment: no padding, 48 bytes.
+    # The C layout with natural alignment: no padding, 56 bytes.
     stats = _lib.aqs_solve_stats
-    assert ctypes.sizeof(stats) == 48
+    assert ctypes.sizeof(stats) == 56
     assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
-    assert stats.fallback.offset == 44
+    assert stats.fallback.offset == 44 and stats.factors_updated.offset == 52

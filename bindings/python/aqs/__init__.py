@@ -41,7 +41,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
-                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN,
+                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
@@ -57,7 +57,7 @@ __all__ = [
     "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
-    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN",
+    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
@@ -120,6 +120,10 @@ class SolveStats:
     nodes_processed: internal tree nodes back-substituted by the solve.
     capped: True if the solve stopped at the set_max_computed cap.
     fallback: True if the solve was exact because of set_exact_fallback.
+    nodes_predicted: internal nodes the solve processed without evaluating
+        their total acceleration (set_prediction).
+    factors_updated: total-acceleration factors recomputed, counted as
+        nodes_updated (the prediction skips some).
     """
 
     metric: str
@@ -131,6 +135,8 @@ class SolveStats:
     nodes_processed: int
     capped: bool
     fallback: bool = False
+    nodes_predicted: int = 0
+    factors_updated: int = 0
 
     @classmethod
     def _from_c(cls, c):
@@ -138,7 +144,8 @@ class SolveStats:
                    error_bound=float(c.error_bound), computed_joints=int(c.computed_joints),
                    counted_joints=int(c.counted_joints), nodes_updated=int(c.nodes_updated),
                    nodes_processed=int(c.nodes_processed), capped=bool(c.capped),
-                   fallback=bool(c.fallback))
+                   fallback=bool(c.fallback), nodes_predicted=int(c.nodes_predicted),
+                   factors_updated=int(c.factors_updated))
 
 
 def version():
@@ -564,6 +571,25 @@ class Linkage:
         """The fraction of set_exact_fallback (0.0: off)."""
         value = ctypes.c_double()
         self._call("aqs_linkage_get_exact_fallback", ctypes.byref(value))
+        return value.value
+
+    def set_prediction(self, margin):
+        """Prediction (aqs_linkage_set_prediction): the joints whose total
+        acceleration exceeded margin x the largest one left queued when the
+        last adaptive solve stopped are computed by the next solve without
+        evaluating theirs, and the update after a step skips their
+        total-acceleration factors (SolveStats.nodes_predicted,
+        factors_updated). The bound stays certified; a wrong prediction only
+        computes more joints. margin 0 turns it off, otherwise >= 1; default
+        aqs.PREDICTION_MARGIN (1024). Unused with eps = 0 or a cap."""
+        f = "aqs_linkage_set_prediction"
+        self._call(f, float(margin))
+
+    @property
+    def prediction(self):
+        """The margin of set_prediction (0.0: off)."""
+        value = ctypes.c_double()
+        self._call("aqs_linkage_get_prediction", ctypes.byref(value))
         return value.value
 
     def set_joint_bound(self, kind):

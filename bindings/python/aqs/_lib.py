@@ -94,6 +94,9 @@ EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tre
 # fraction of the joints (aqs_linkage_set_exact_fallback).
 FALLBACK_RUN = 15
 
+# Default margin of aqs_linkage_set_prediction (AQS_PREDICTION_MARGIN).
+PREDICTION_MARGIN = 1024.0
+
 EXACT_SOLVERS = {
     "aba": EXACT_ABA,
     "dca": EXACT_DCA,
@@ -166,6 +169,8 @@ class aqs_solve_stats(ctypes.Structure):
         ("nodes_processed", ctypes.c_int32),  # internal nodes back-substituted by the solve
         ("capped", ctypes.c_int32),           # 1 if the solve stopped at the max_computed cap
         ("fallback", ctypes.c_int32),         # 1 if exact because of the exact fallback
+        ("nodes_predicted", ctypes.c_int32),  # processed without evaluating A (prediction)
+        ("factors_updated", ctypes.c_int32),  # total-acceleration factors recomputed
     ]
 
 
@@ -274,6 +279,8 @@ PROTOTYPES = {
     "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
+    "aqs_linkage_set_prediction": (status_t, [linkage_p, ctypes.c_double]),
+    "aqs_linkage_get_prediction": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_refine": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_stats": (status_t, [linkage_p, solve_stats_p]),
     "aqs_joint_get_computed": (status_t, [linkage_p, ctypes.c_int32, int32_p]),
