@@ -61,6 +61,7 @@ typedef struct bench_options {
     uint64_t seed;
     double first_move;
     double fallback; /* aqs_linkage_set_exact_fallback on the adaptive linkage (0: off) */
+    double prediction; /* aqs_linkage_set_prediction on the adaptive linkage (0: off) */
     const char *out, *tip_path, *export_urdf;
     int append, quiet;
 } bench_options;
@@ -87,7 +88,7 @@ typedef struct bench_state {
 typedef struct bench_run {
     int32_t steps;
     double median_s, mean_s, exact_median_s, dca_median_s;
-    double mean_ne, mean_nu, mean_np, max_bound;
+    double mean_ne, mean_nu, mean_np, mean_npred, mean_nf, max_bound;
     int32_t max_ne, fallback_steps;
     double disp_err, max_disp;
 } bench_run;
@@ -125,6 +126,8 @@ static void usage(FILE *f)
             "  --seed S           seed of the force bodies and directions (default 1)\n"
             "  --first-move X     dt: the fastest joint of the exact first solve moves X\n"
             "                     (rad or m) in the first step (default 1e-3)\n"
+            "  --prediction M     aqs_linkage_set_prediction(M) on the adaptive linkage\n"
+            "                     (default AQS_PREDICTION_MARGIN = 1024; 0: off)\n"
             "  --fallback F       aqs_linkage_set_exact_fallback(F) on the adaptive linkage:\n"
             "                     exact steps after one that computed more than F of the\n"
             "                     joints (default 0: off)\n"
@@ -256,7 +259,7 @@ static int parse_list(const char *opt, const char *s, bench_options *o,
 }
 
 enum { OPT_SCENE, OPT_JOINTS, OPT_FORCES, OPT_METRIC, OPT_EPS, OPT_STEPS, OPT_REPEATS,
-       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
+       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_PREDICTION, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
        OPT_TIP_EVERY, OPT_QUIET, OPT_EXPORT_URDF, OPT_HELP };
 
 static const struct {
@@ -268,7 +271,7 @@ static const struct {
     {"--eps", OPT_EPS, 1},           {"--steps", OPT_STEPS, 1},
     {"--repeats", OPT_REPEATS, 1},   {"--seed", OPT_SEED, 1},
     {"--first-move", OPT_FIRST_MOVE, 1}, {"--exact-every", OPT_EXACT_EVERY, 1},
-    {"--fallback", OPT_FALLBACK, 1},
+    {"--fallback", OPT_FALLBACK, 1}, {"--prediction", OPT_PREDICTION, 1},
     {"--out", OPT_OUT, 1},           {"--append", OPT_APPEND, 0},
     {"--tip-path", OPT_TIP_PATH, 1}, {"--tip-every", OPT_TIP_EVERY, 1},
     {"--quiet", OPT_QUIET, 0},       {"--help", OPT_HELP, 0},
@@ -296,6 +299,7 @@ static int parse_options(int argc, char **argv, bench_options *o)
     o->tip_every = 1;
     o->seed = 1;
     o->first_move = 1e-3;
+    o->prediction = AQS_PREDICTION_MARGIN;
     for (i = 1; i < argc; ++i) {
         const char *val = NULL;
         int id = -1;
@@ -380,6 +384,15 @@ static int parse_options(int argc, char **argv, bench_options *o)
             }
             if (!(o->fallback >= 0.0 && o->fallback <= 1.0)) {
                 fprintf(stderr, "aqs-bench: --fallback must be in [0, 1]\n");
+                return 1;
+            }
+            break;
+        case OPT_PREDICTION:
+            if (parse_double("--prediction", val, &o->prediction) != 0) {
+                return 1;
+            }
+            if (!(o->prediction == 0.0 || o->prediction >= 1.0) || !isfinite(o->prediction)) {
+                fprintf(stderr, "aqs-bench: --prediction must be 0 or a finite number >= 1\n");
                 return 1;
             }
             break;
@@ -641,6 +654,8 @@ static int timed_step(bench_state *b, aqs_linkage *L, double dt, double *t, benc
     sums->mean_ne += st.computed_joints;
     sums->mean_nu += st.nodes_updated;
     sums->mean_np += st.nodes_processed;
+    sums->mean_npred += st.nodes_predicted;
+    sums->mean_nf += st.factors_updated;
     sums->max_ne = st.computed_joints > sums->max_ne ? st.computed_joints : sums->max_ne;
     sums->fallback_steps += st.fallback;
     sums->max_bound = st.error_bound > sums->max_bound ? st.error_bound : sums->max_bound;
@@ -654,6 +669,8 @@ static void finish_sums(bench_run *r, int32_t n)
     r->mean_ne /= n;
     r->mean_nu /= n;
     r->mean_np /= n;
+    r->mean_npred /= n;
+    r->mean_nf /= n;
 }
 
 /* The exact reference run of nf forces: its displacements become the
@@ -695,6 +712,8 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
                "aqs_linkage_set_tolerance") ||
         failed(aqs_linkage_set_exact_fallback(b->adapt, b->opt->fallback), b->adapt,
                "aqs_linkage_set_exact_fallback") ||
+        failed(aqs_linkage_set_prediction(b->adapt, b->opt->prediction), b->adapt,
+               "aqs_linkage_set_prediction") ||
         reset(b, b->adapt, nf) != 0 || reset(b, b->exact, nf) != 0 ||
         (record && record_tip(b, b->adapt, "adaptive", nf, eps, 0) != 0)) {
         return 1;
@@ -778,11 +797,13 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"nodes_processed\":%.4f,\"max_error_bound\":%.9g,\"ratio_R\":%.9g,"
             "\"displacement_error\":%.9g,\"max_displacement\":%.9g,"
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
-            "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d}\n",
+            "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
+            "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
-            b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps);
+            b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
+            o->prediction, r->mean_npred, r->mean_nf);
     fflush(b->json);
 }
 

@@ -25,6 +25,7 @@ REQUIRED = {
     "max_error_bound": (int, float), "ratio_R": float, "peak_rss_bytes": int,
     "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
     "fallback": (int, float), "fallback_steps": int,
+    "prediction": (int, float), "nodes_predicted": (int, float), "factors_updated": (int, float),
 }
 
 
@@ -158,6 +159,23 @@ def test_fallback(tmp_path):
     assert on["computed_joints"] > off["computed_joints"] / 2
 
 
+def test_prediction(tmp_path):
+    """--prediction: on by default (1024), nodes predicted and factors skipped
+    after the first step; --prediction 0 predicts nothing and updates every
+    factor; the same joints are computed either way (the loads do not change
+    during a run, so the prediction is right)."""
+    out = tmp_path / "pred.jsonl"
+    args = ("--joints", "2000", "--steps", "10", "--eps", "2^-19", "--forces", "10", "--quiet")
+    run(*args, "--out", str(out))
+    run(*args, "--prediction", "0", "--append", "--out", str(out))
+    on, off = [json.loads(line) for line in out.read_text().splitlines()]
+    assert on["prediction"] == 1024 and off["prediction"] == 0
+    assert on["nodes_predicted"] > 0 and off["nodes_predicted"] == 0
+    assert on["factors_updated"] < on["nodes_updated"]
+    assert off["factors_updated"] == off["nodes_updated"]
+    assert on["computed_joints"] == off["computed_joints"]
+
+
 def test_tip_path(tmp_path):
     tip = tmp_path / "tip.csv"
     run("--scene", "chain30", "--steps", "4", "--eps", "2^-5", "--tip-path", str(tip),
@@ -185,6 +203,7 @@ def test_tip_path(tmp_path):
     (["--forces", "31", "--scene", "chain30"], "forces"),
     (["--steps"], "needs a value"),
     (["--fallback", "1.5"], "--fallback"),
+    (["--prediction", "0.5"], "--prediction"),
 ])
 def test_bad_input(args, message):
     res = run("--joints", "200", "--quiet", *args, check=False)
