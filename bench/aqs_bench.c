@@ -767,6 +767,8 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
     const bench_options *o = b->opt;
     const double t_node = dca_ms / b->tree_nodes;
     const double denom = (r->mean_ne + nf * (log((double)b->joints) / log(2.0))) * t_node;
+    /* the same against the articulated-body step's time per joint */
+    const double denom_aba = denom / t_node * (exact_ms / b->joints);
     const long kb = bench_peak_rss_kb();
     if (b->json == NULL) {
         return;
@@ -798,12 +800,13 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"displacement_error\":%.9g,\"max_displacement\":%.9g,"
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
-            "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f}\n",
+            "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
+            "\"ratio_R_aba\":%.9g}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
-            o->prediction, r->mean_npred, r->mean_nf);
+            o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba);
     fflush(b->json);
 }
 

@@ -200,9 +200,9 @@ def tables(sets, scaling_path):
         dca = "exact_dca_ms_per_step" in r0
         print("| N_f | eps | ms/step | exact ms/step | speedup |"
               + (" DCA ms/step | speedup vs DCA |" if dca else "")
-              + " N_E | nodes updated | R | displ. error | max bound |")
+              + " N_E | nodes updated | R | R vs ABA/joint | displ. error | max bound |")
         print("|---:|---:|---:|---:|---:|" + ("---:|---:|" if dca else "")
-              + "---:|---:|---:|---:|---:|")
+              + "---:|---:|---:|---:|---:|---:|")
         for nf, g in by_forces(rows).items():
             for r in g:
                 extra = (f"{r['exact_dca_ms_per_step']:.4g} | {r['speedup_dca']:.3g} | "
@@ -210,8 +210,8 @@ def tables(sets, scaling_path):
                 print(f"| {nf} | 2^-{r['eps_log2']} | {r['ms_per_step']:.3g} | "
                       f"{r['exact_ms_per_step']:.4g} | {r['speedup']:.3g} | {extra}"
                       f"{r['computed_joints']:,.1f} | {r['nodes_updated']:,.1f} | "
-                      f"{r['ratio_R']:.2f} | {r['displacement_error']:.2g} | "
-                      f"{r['max_error_bound']:.2g} |")
+                      f"{r['ratio_R']:.2f} | {r.get('ratio_R_aba', float('nan')):.2f} | "
+                      f"{r['displacement_error']:.2g} | {r['max_error_bound']:.2g} |")
     rows = load_jsonl(scaling_path, latest_run=False)
     latest = {r["joints"]: r for r in rows}
     if latest:

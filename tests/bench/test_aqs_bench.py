@@ -26,6 +26,7 @@ REQUIRED = {
     "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
     "fallback": (int, float), "fallback_steps": int,
     "prediction": (int, float), "nodes_predicted": (int, float), "factors_updated": (int, float),
+    "ratio_R_aba": float,
 }
 
 
@@ -81,6 +82,10 @@ def test_consistency(lines):
         t_node = d["exact_dca_ms_per_step"] / d["tree_nodes"]
         assert d["ratio_R"] == pytest.approx(
             d["ms_per_step"] / ((d["computed_joints"] + d["forces"] * log2n) * t_node), rel=1e-6)
+        # the same against the articulated-body step's time per joint
+        t_joint = d["exact_ms_per_step"] / d["joints"]
+        assert d["ratio_R_aba"] == pytest.approx(
+            d["ms_per_step"] / ((d["computed_joints"] + d["forces"] * log2n) * t_joint), rel=1e-6)
         assert 0 < d["computed_joints"] <= d["max_computed_joints"] <= d["joints"]
         assert d["nodes_processed"] <= d["tree_nodes"]
         assert d["peak_rss_bytes"] > 0
