@@ -321,6 +321,14 @@ void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *ou
         for (i = 0; i < 6; i++) s += VS[i * d + k] * g[i];
         v[k] = s;
     }
+    if (d == 1) { /* revolute, prismatic: ZD is a column */
+        for (i = 0; i < rows; i++) {
+            const double *y = Y + 6 * i;
+            out[i] = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5] -
+                     ZD[i] * v[0];
+        }
+        return;
+    }
     for (i = 0; i < rows; i++) {
         const double *y = Y + 6 * i, *zd = ZD + (int64_t)i * d;
         double s = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5];
