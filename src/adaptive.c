@@ -177,14 +177,15 @@ static double resum(const heap *h)
 
 /* ------------------------------------------------------------ prediction
  *
- * A node whose A exceeded the margin times the largest A left queued when
- * the solve stopped will be processed by the next solve too (A moves little
- * in a step). The next solve processes such nodes (a top-closed set: A of a
- * parent is at least its children's) without evaluating their A, like the
- * nodes on the way to a free joint, and the updates before it skip their
- * factors T. The bound stays certified: every node left queued is
- * evaluated with a current T (its descendants are outside the set), and a
- * wrong prediction only computes more joints than needed. */
+ * A node whose A exceeded the margin times the stopping level (the largest
+ * A a queued node can have when the solve stops) will be processed by the
+ * next solve too (A moves little in a step). The next solve processes such
+ * nodes (a top-closed set: A of a parent is at least its children's)
+ * without evaluating their A, like the nodes on the way to a free joint,
+ * and the updates before it skip their factors T. The bound stays
+ * certified: every node left queued is evaluated with a current T (its
+ * descendants are outside the set), and a wrong prediction only computes
+ * more joints than needed. */
 
 int adaptive_predict_usable(const aqs_linkage *L)
 {
