@@ -1100,6 +1100,75 @@ static void test_prediction(void **state)
     assert_true(skipped >= steps / 2);
 }
 
+/* Refine after solves that used the prediction (factors skipped by the
+ * update after the step before): the solve's and the refined accelerations
+ * keep their bounds, against an exact twin at the same (bit-identical)
+ * positions, for every measure (floor as in test_prediction). */
+static void test_prediction_refine(void **state)
+{
+    uint64_t rng = 4711, r0;
+    spec sp = {250, 0, 1, 12, 1, 3.0, 0}; /* fixed base, revolute: positions copy exactly */
+    int metric, step, refined = 0, predicted = 0;
+    (void)state;
+    for (metric = 0; metric < 4; metric++) {
+        aqs_linkage *L, *X;
+        double *exact, *approx, *q, norm;
+        int32_t nv;
+        r0 = rng;
+        L = random_linkage(&rng, &sp);
+        rng = r0;
+        X = random_linkage(&rng, &sp);
+        assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
+        nv = L->nv;
+        exact = malloc(sizeof(double) * (size_t)(nv + 1));
+        approx = malloc(sizeof(double) * (size_t)(nv + 1));
+        q = malloc(sizeof(double) * (size_t)(L->nq + 1));
+        norm = solution_norm(X);
+        assert_int_equal(aqs_linkage_set_tolerance(L, metric, ldexp(1.0, -6)), AQS_OK);
+        for (step = 0; step < 6; step++) {
+            aqs_solve_stats st;
+            double err, floor_ = 1e-15 * norm, n2, mj;
+            int k;
+            (void)solve_stats(L, 1); /* predicts, skips factors */
+            assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)L->nq), AQS_OK);
+            assert_int_equal(aqs_linkage_set_positions(X, q, (size_t)L->nq), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+            assert_int_equal(aqs_linkage_get_accelerations(X, exact, (size_t)nv), AQS_OK);
+            exact_norms(L, exact, &n2, &mj);
+            if (metric == AQS_METRIC_REL_LINKAGE || metric == AQS_METRIC_REL_JOINT)
+                floor_ = n2 > 0 ? floor_ / (metric == AQS_METRIC_REL_LINKAGE ? n2 : mj) : 0;
+            st = solve_stats(L, 0);
+            predicted += st.nodes_predicted > 0;
+            for (k = 0; k < 2; k++) {
+                double eps = ldexp(1.0, k ? -18 : -6);
+                if (k) {
+                    const int32_t before = st.computed_joints;
+                    assert_int_equal(aqs_linkage_refine(L, eps), AQS_OK);
+                    st.size = sizeof st;
+                    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+                    refined += st.computed_joints > before;
+                }
+                assert_int_equal(aqs_linkage_get_accelerations(L, approx, (size_t)nv), AQS_OK);
+                err = true_error(L, metric, exact, approx);
+                assert_true(st.error_bound <= eps);
+                if (!(err <= st.error_bound * (1 + REL_SLACK) + floor_))
+                    fail_msg("metric %d step %d eps %g: true %.17g > bound %.17g", metric, step, eps, err,
+                             st.error_bound);
+            }
+            assert_int_equal(aqs_linkage_set_tolerance(L, metric, ldexp(1.0, -6)), AQS_OK);
+        }
+        free(exact);
+        free(approx);
+        free(q);
+        aqs_linkage_destroy(L);
+        aqs_linkage_destroy(X);
+    }
+    print_message("refine after predicted solves: %d of 24 solves predicted, %d refines computed more\n",
+                  predicted, refined);
+    assert_true(refined > 0);
+    assert_true(predicted >= 12);
+}
+
 /* aqs_linkage_set_prediction's errors change nothing; margin 0, a cap and
  * eps = 0 predict nothing. */
 static void test_prediction_settings(void **state)
@@ -1242,6 +1311,7 @@ int main(void)
         cmocka_unit_test(test_lazy_equals_eager),
         cmocka_unit_test(test_prediction),
         cmocka_unit_test(test_prediction_settings),
+        cmocka_unit_test(test_prediction_refine),
         cmocka_unit_test(test_eps_zero_trajectory),
         cmocka_unit_test(test_cost_is_local),
         cmocka_unit_test(test_exact_fallback),
