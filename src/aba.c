@@ -267,5 +267,6 @@ aqs_status aba_solve(aqs_linkage *L)
     welded_forces(L);
     adaptive_mark_exact(L);
     L->t.nodes_updated = 0;
+    L->t.factors_updated = 0;
     return AQS_OK;
 }

@@ -131,10 +131,14 @@ void update_mark(aqs_linkage *L, int32_t n)
 
 void update_mark_all(aqs_linkage *L) { L->t.all_dirty = 1; }
 
-/* Refresh a leaf's b and mark its ancestors. */
+/* Refresh a leaf's b and mark its ancestors. While the whole tree is stale
+ * (all_dirty: after an exact step by the articulated-body algorithm, which
+ * needs only the composites' loads) b is left to the full update, which
+ * recomputes every leaf's; without coefficients dca_enable marks everything
+ * for that full update. */
 static void refresh_leaf(aqs_linkage *L, int32_t leaf)
 {
-    if (L->t.data) dca_leaf_b(L, leaf); /* else dca_enable computes every b later */
+    if (L->t.data && !L->t.all_dirty) dca_leaf_b(L, leaf);
     update_mark(L, L->t.nodes[leaf].parent);
 }
 
@@ -226,7 +230,11 @@ aqs_status update_coefficients(aqs_linkage *L)
     t->factors_updated = 0;
     if (t->all_dirty) {
         L->loads_dirty = L->gravity_dirty = 1;
-        update_loads(L); /* marks are superseded by the full pass */
+        update_loads(L); /* the composites' loads; marks are superseded by the full pass */
+        /* every leaf's b (the world leaf's from gravity): those refreshed
+         * while the tree was stale were skipped (refresh_leaf) */
+        for (k = 0; k < t->nnodes; k++)
+            if (t->nodes[k].joint < 0 && t->data) dca_leaf_b(L, k);
         for (k = 0; k < t->nnodes && st == AQS_OK; k++) st = update_node(L, k);
         t->nodes_updated = t->nnodes;
     } else {

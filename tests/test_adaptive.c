@@ -909,16 +909,31 @@ static void test_exact_fallback(void **state)
     /* a tolerance so small that the adaptive solve computes almost every joint */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-13), AQS_OK);
     for (round = 0; round < 2; round++) {
+        twin_solve(L, X);
         st = solve_stats(L, round);
         assert_int_equal(st.fallback, 0); /* adaptive: the first, then the probe */
         assert_true(st.error_bound <= 1e-13);
         assert_true(st.computed_joints > st.counted_joints / 2);
+        {
+            /* the probe after exact steps recomputes the whole tree, every
+             * leaf's b included (the exact steps skip them): its bound holds
+             * against the twin's exact solve (floor: the ABA and the DCA
+             * agree to ~1e-13 relative, 1e-12 here) */
+            double *a = malloc(sizeof(double) * (size_t)(L->nv + 1)), *e = malloc(sizeof(double) * (size_t)(L->nv + 1));
+            assert_int_equal(aqs_linkage_get_accelerations(L, a, (size_t)L->nv), AQS_OK);
+            assert_int_equal(aqs_linkage_get_accelerations(X, e, (size_t)L->nv), AQS_OK);
+            assert_true(true_error(L, AQS_METRIC_REL_JOINT, e, a) <= st.error_bound * (1 + REL_SLACK) + 1e-12);
+            free(a);
+            free(e);
+        }
         for (k = 0; k < AQS_FALLBACK_RUN; k++) {
             twin_solve(L, X); /* at the positions the solve (or step) starts from */
             st = solve_stats(L, round); /* round 1: through steps */
             assert_int_equal(st.fallback, 1);
             assert_true(st.error_bound == 0.0);
             assert_int_equal(st.computed_joints, st.counted_joints);
+            assert_int_equal(st.nodes_updated, 0); /* the tree is left stale */
+            assert_int_equal(st.factors_updated, 0);
             assert_true(twin_diff(L, X) <= 1e-12);
         }
     }
