@@ -365,8 +365,11 @@ AQS_API aqs_status aqs_linkage_set_exact_fallback(aqs_linkage *linkage, double f
 AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, double *fraction);
 
 /** Prediction: a joint whose node's total acceleration A(C) exceeded
- *  margin x the largest A left queued when the last adaptive solve stopped
- *  is certain to be needed again after a step (A moves little), so the next
+ *  margin x the stopping level of the last adaptive solve (the largest A a
+ *  queued node may have when it stops: eps^2, (eps L)^2 for
+ *  AQS_METRIC_REL_JOINT with L its lower bound on the largest joint
+ *  acceleration, eps^2 A(root) for AQS_METRIC_REL_LINKAGE) is certain to be
+ *  needed again after a step (A moves little), so the next
  *  solve computes those joints (a set closed towards the root) without
  *  evaluating their A, and the update after the step skips their
  *  total-acceleration factors (aqs_solve_stats.nodes_predicted,

@@ -575,8 +575,9 @@ class Linkage:
 
     def set_prediction(self, margin):
         """Prediction (aqs_linkage_set_prediction): the joints whose total
-        acceleration exceeded margin x the largest one left queued when the
-        last adaptive solve stopped are computed by the next solve without
+        acceleration exceeded margin x the stopping level of the last
+        adaptive solve (the largest one a queued node may have when it
+        stops) are computed by the next solve without
         evaluating theirs, and the update after a step skips their
         total-acceleration factors (SolveStats.nodes_predicted,
         factors_updated). The bound stays certified; a wrong prediction only
