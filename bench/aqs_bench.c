@@ -172,6 +172,25 @@ static int parse_double(const char *opt, const char *s, double *out)
     return 0;
 }
 
+/* A number option with a condition on its value beyond parse_double's:
+ * ok(v), else the message "OPT must be WHAT". */
+static int positive(double v) { return v > 0.0; }
+static int unit_interval(double v) { return v <= 1.0; }
+static int zero_or_at_least_one(double v) { return v == 0.0 || v >= 1.0; }
+
+static int parse_double_where(const char *opt, const char *s, double *out, int (*ok)(double),
+                              const char *what)
+{
+    if (parse_double(opt, s, out) != 0) {
+        return 1;
+    }
+    if (!ok(*out)) {
+        fprintf(stderr, "aqs-bench: %s must be %s\n", opt, what);
+        return 1;
+    }
+    return 0;
+}
+
 static int add_eps(bench_options *o, double eps, int log2i)
 {
     if (o->neps == BENCH_MAX_LIST) {
@@ -370,29 +389,18 @@ static int parse_options(int argc, char **argv, bench_options *o)
             o->seed = (uint64_t)v;
             break;
         case OPT_FIRST_MOVE:
-            if (parse_double("--first-move", val, &o->first_move) != 0) {
-                return 1;
-            }
-            if (!(o->first_move > 0.0)) {
-                fprintf(stderr, "aqs-bench: --first-move must be > 0\n");
+            if (parse_double_where("--first-move", val, &o->first_move, positive, "> 0") != 0) {
                 return 1;
             }
             break;
         case OPT_FALLBACK:
-            if (parse_double("--fallback", val, &o->fallback) != 0) {
-                return 1;
-            }
-            if (!(o->fallback >= 0.0 && o->fallback <= 1.0)) {
-                fprintf(stderr, "aqs-bench: --fallback must be in [0, 1]\n");
+            if (parse_double_where("--fallback", val, &o->fallback, unit_interval, "in [0, 1]") != 0) {
                 return 1;
             }
             break;
         case OPT_PREDICTION:
-            if (parse_double("--prediction", val, &o->prediction) != 0) {
-                return 1;
-            }
-            if (!(o->prediction == 0.0 || o->prediction >= 1.0) || !isfinite(o->prediction)) {
-                fprintf(stderr, "aqs-bench: --prediction must be 0 or a finite number >= 1\n");
+            if (parse_double_where("--prediction", val, &o->prediction, zero_or_at_least_one,
+                                   "0 or a finite number >= 1") != 0) {
                 return 1;
             }
             break;

@@ -873,6 +873,25 @@ static aqs_solve_stats solve_stats(aqs_linkage *L, int step)
     return st;
 }
 
+/* A double setter (set_exact_fallback, set_prediction) given L's current
+ * value good: each bad value gets AQS_EINVAL with a message naming the
+ * argument, and changes nothing; the getter rejects NULL. */
+typedef aqs_status (*set_double_fn)(aqs_linkage *, double);
+typedef aqs_status (*get_double_fn)(const aqs_linkage *, double *);
+static void check_rejected_doubles(aqs_linkage *L, set_double_fn set, get_double_fn get,
+                                   const double *bad, int nbad, double good, const char *name)
+{
+    double v = -1;
+    int k;
+    for (k = 0; k < nbad; k++) {
+        assert_int_equal(set(L, bad[k]), AQS_EINVAL);
+        assert_non_null(strstr(aqs_linkage_last_error(L), name));
+        assert_int_equal(get(L, &v), AQS_OK);
+        assert_true(v == good);
+    }
+    assert_int_equal(get(L, NULL), AQS_EINVAL);
+}
+
 /* The exact fallback: after an adaptive solve that computed more than the
  * fraction of the counted joints, AQS_FALLBACK_RUN exact solves by the
  * articulated-body algorithm (the same accelerations as a twin's exact
@@ -896,13 +915,8 @@ static void test_exact_fallback(void **state)
     assert_int_equal(aqs_linkage_get_exact_fallback(L, &fr), AQS_OK);
     assert_true(fr == 0.0); /* off by default */
     assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.5), AQS_OK);
-    for (k = 0; k < 4; k++) {
-        assert_int_equal(aqs_linkage_set_exact_fallback(L, bad[k]), AQS_EINVAL);
-        assert_non_null(strstr(aqs_linkage_last_error(L), "fraction"));
-        assert_int_equal(aqs_linkage_get_exact_fallback(L, &fr), AQS_OK);
-        assert_true(fr == 0.5);
-    }
-    assert_int_equal(aqs_linkage_get_exact_fallback(L, NULL), AQS_EINVAL);
+    check_rejected_doubles(L, aqs_linkage_set_exact_fallback, aqs_linkage_get_exact_fallback, bad, 4, 0.5,
+                           "fraction");
     /* eps = 0: exact anyway, never a fallback */
     st = solve_stats(L, 0);
     assert_int_equal(st.fallback, 0);
@@ -1196,13 +1210,7 @@ static void test_prediction_settings(void **state)
     int k;
     (void)state;
     assert_int_equal(aqs_linkage_set_prediction(L, 64.0), AQS_OK);
-    for (k = 0; k < 5; k++) {
-        assert_int_equal(aqs_linkage_set_prediction(L, bad[k]), AQS_EINVAL);
-        assert_non_null(strstr(aqs_linkage_last_error(L), "margin"));
-        assert_int_equal(aqs_linkage_get_prediction(L, &m), AQS_OK);
-        assert_true(m == 64.0);
-    }
-    assert_int_equal(aqs_linkage_get_prediction(L, NULL), AQS_EINVAL);
+    check_rejected_doubles(L, aqs_linkage_set_prediction, aqs_linkage_get_prediction, bad, 5, 64.0, "margin");
     assert_int_equal(aqs_linkage_set_prediction(NULL, 2.0), AQS_EINVAL);
     assert_int_equal(aqs_linkage_create(&U), AQS_OK);
     assert_int_equal(aqs_linkage_set_prediction(U, 2.0), AQS_ESTATE);
