@@ -101,7 +101,7 @@ check-c: $(C_TESTS)
 	@set -e; for t in $(C_TESTS); do echo "== $$t"; $$t; done
 
 check-reference: $(CXX_TESTS)
-	@set -e; for t in $(CXX_TESTS); do echo "== $$t"; AQS_VECTORS=$(abspath ../shared/vectors) $$t; done
+	@set -e; for t in $(CXX_TESTS); do echo "== $$t"; AQS_VECTORS=$(abspath tests/vectors) $$t; done
 
 ifeq ($(SANITIZE),1)
 # Python loads the library into an uninstrumented interpreter: preload the runtime.
@@ -111,7 +111,7 @@ else
 PY_ENV :=
 endif
 check-python: $(SHLIB) $(BUILD)/bench/urdf_export
-	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
+	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath tests/vectors) \
 	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) \
 	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
 
