@@ -63,7 +63,7 @@ if [ $((rc & ~4)) -ne 0 ]; then
 fi
 added=$(grep -c "^  \[A\] " "$work/all" || true)
 grown=$(tr '\n' ' ' < "$work/sized")
-echo "check_abi: compatible with $baseline ($(grep -c '<elf-symbol ' "$baseline") symbols in the baseline, $added added; size-versioned structs may grow: $grown)"
+echo "check_abi: compatible with $baseline ($(grep -c '<elf-symbol ' "$baseline") symbols in the baseline, $added added; size-versioned structs may grow: ${grown% })"
 if [ "$added" -gt 0 ]; then
     grep "^  \[A\] " "$work/all"
     echo "check_abi: additions are compatible; at the next release run make abi-baseline (docs/abi.md)"
