@@ -11,20 +11,51 @@ first ([omega; v] for motion, [n; f] for force); quaternions are (w, x, y, z);
 bodies and joints are int indices in the order they were added; aqs.WORLD (-1)
 is the fixed world.
 
-    import aqs
-    with aqs.Linkage() as L:
-        b = L.add_body(1.0, com=(0.5, 0, 0), inertia=[0.01, 0.01, 0.01])
-        L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
-        L.finalize()
-        L.set_gravity((0, -9.81, 0))
-        stats = L.solve()                 # exact by default
-        print(L.accelerations(), stats.computed_joints)
-        L.set_tolerance("rel_joint", 1e-6)  # error-bounded adaptive solving
-        print(L.solve().error_bound)
+>>> import numpy as np
+>>> import aqs
+>>> with aqs.Linkage() as L:                 # a 2 kg rod on a revolute joint about z
+...     b = L.add_body(2.0, com=(0.5, 0, 0), inertia=np.diag([0.01, 0.1, 0.1]))
+...     j = L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
+...     L.finalize()
+...     L.set_gravity((0, -9.81, 0))
+...     stats = L.solve()                    # exact by default
+...     print(L.accelerations().round(4), stats.computed_joints)
+...     L.set_tolerance("rel_joint", 1e-6)   # error-bounded adaptive solving
+...     print(L.solve().error_bound)
+[-16.35] 1
+0.0
 
-The shared library is found through AQS_LIBRARY (a path), then a libaqs.so*
-inside this package, then the source checkout's build/, then the system
-(ctypes.util.find_library).
+Arguments are taken strictly: arrays must hold real numbers (int or float,
+any numpy integer or float dtype; converted to float64, not copied when they
+already are float64 C-contiguous) in exactly the documented shape, numbers
+are int, float or numpy scalars, indices are ints. Anything else raises
+TypeError (wrong type: a string, a bool where a number is expected, complex)
+or aqs.SizeError (wrong shape), naming the argument, before any C call:
+
+>>> with aqs.Linkage() as L:
+...     L.add_body(1.0, com=(0.5, 0), inertia=np.eye(3))
+Traceback (most recent call last):
+...
+aqs.SizeError: aqs_body_add: com has shape (2,), expected (3,) [AQS_ESIZE]
+>>> with aqs.Linkage() as L:
+...     L.add_body("1.0", com=(0.5, 0, 0), inertia=np.eye(3))
+Traceback (most recent call last):
+...
+TypeError: aqs_body_add: mass must be a real number (int, float or numpy scalar), got '1.0' (str)
+
+Bulk getters take an optional out= array, filled in place: it must be a
+writable C-contiguous float64 numpy array of exactly the result's shape.
+
+Threads: every Linkage method holds that linkage's lock (see Linkage), and
+the C calls run without the GIL.
+
+The shared library is found, in order, through: AQS_LIBRARY (a path, or a
+file name such as libaqs.so.0 that the dynamic loader looks up in the system
+paths), the libaqs.so.* installed inside this package (a wheel or
+`pip install ./bindings/python` builds one from the C sources), the source
+checkout's build/ (when this package is the checkout's bindings/python),
+and the system (ctypes.util.find_library("aqs")); aqs.library_path says
+which was loaded.
 """
 
 import collections
@@ -340,7 +371,7 @@ class Linkage:
     >>> L.solve()
     Traceback (most recent call last):
     ...
-    aqs._errors.StateError: aqs_linkage_solve: the linkage is closed [AQS_ESTATE]
+    aqs.StateError: aqs_linkage_solve: the linkage is closed [AQS_ESTATE]
     """
 
     def __init__(self):
