@@ -68,6 +68,10 @@ def clean_env(**changes):
            and not k.startswith("PIP_")}
     env.update(PIP_DISABLE_PIP_VERSION_CHECK="1", PIP_NO_INPUT="1", AQS_BUILD_JOBS="2")
     env.update({k: v for k, v in changes.items() if v is not None})
+    if "AQS_LIBRARY" not in env:
+        # make check SANITIZE=1 preloads the sanitizer runtime for the sanitized
+        # build/libaqs; pip, the compiler and the package's own library need none.
+        env.pop("LD_PRELOAD", None)
     return env
 
 
