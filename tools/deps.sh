@@ -21,6 +21,8 @@ command -v make >/dev/null || missing+=(make)
 # A fresh Debian machine may have no Python at all: take Debian's, with pip.
 PY=${PYTHON:-python3}
 command -v "$PY" >/dev/null || missing+=(python3 python3-pip)
+# tests/python/test_install.py installs the package into a fresh venv (Debian: python3-venv).
+command -v "$PY" >/dev/null && ! $PY -c "import venv, ensurepip" 2>/dev/null && missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "deps: installing ${missing[*]}"
     SUDO=""
