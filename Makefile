@@ -4,6 +4,7 @@
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
 #   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
+#   make bench-hard     hard-case suite, long mode (docs/hardcases.md); check-hard: quick, in check
 #   make install    PREFIX=/usr/local DESTDIR=
 #   make deps       install the Debian/PyPI packages that are missing
 
