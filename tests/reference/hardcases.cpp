@@ -75,7 +75,7 @@ struct FamilyTol {
 const double kNearEqAba = 1.1e-16;
 const FamilyTol kTolAba[] = {
     {"chain", 1e-12},   {"pointmass", 1e-12}, {"altmass", 1e-11}, {"near_eq", 1e-12},
-    {"lightdistal", 1e-11}, {"prismatic", 1e-12}, {"floating", 1e-11},
+    {"lightdistal", 1e-11}, {"prismatic", 1e-11}, {"floating", 1e-11},
 };
 
 // DCA (exact) and adaptive: the target is "within 10x of the ABA's error".
