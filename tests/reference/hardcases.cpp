@@ -734,11 +734,13 @@ int main(int argc, char **argv) {
         } else {
             ref = ref_ld;
         }
+        double dense_vs_q = NAN;
         if (md.nv <= kDenseMaxDofs && !long_mode) {
             const aqsref::Solution ds = aqsref::solve(dense_model(md, c.loads));
             std::vector<double> dq(md.nv);
             for (int i = 0; i < md.nv; ++i) dq[i] = (double)ds.qdd(i);
             const double e = exact_err(dq, ref, js).rel2;
+            dense_vs_q = e;
             // The dense solve's own error grows like the long-double ABA's (cond(H) and the
             // cancellation in qdd ~ delta on near_eq): allowed max(kTolRefDense, 1e4 x ld vs q).
             verdict(e <= std::max(kTolRefDense, 1e4 * (std::isfinite(ld_vs_q) ? ld_vs_q : 0.0)), false,
@@ -764,9 +766,9 @@ int main(int argc, char **argv) {
                     " (tol " + fmt("%.0e", tol_aba) + ")");
         if (json)
             std::fprintf(json, "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"aba\",\"status\":%d,"
-                         "\"rel2\":%s,\"relmax\":%s,\"ref_ld_vs_quad\":%s,\"ref\":%s}\n",
+                         "\"rel2\":%s,\"relmax\":%s,\"ref_ld_vs_quad\":%s,\"ref_dense_vs_quad\":%s,\"ref\":%s}\n",
                          jstr(sp.name).c_str(), jstr(sp.family).c_str(), md.nv, st, jnum(aba.rel2).c_str(),
-                         jnum(aba.relmax).c_str(), jnum(ld_vs_q).c_str(), use_quad ? "\"quad\"" : "\"ld\"");
+                         jnum(aba.relmax).c_str(), jnum(ld_vs_q).c_str(), jnum(dense_vs_q).c_str(), use_quad ? "\"quad\"" : "\"ld\"");
         // DCA
         st = aqs_linkage_set_exact_solver(c.l, AQS_EXACT_DCA);
         std::string dca_msg;
