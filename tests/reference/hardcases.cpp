@@ -58,8 +58,13 @@ namespace {
 // (qdd a small difference, ~ delta): up to ~1e-8 at delta = 1e-12.
 const double kTolRefLdVsQuad = 1e-6;
 // Dense long-double reference (dense_reference.hpp, Eigen LDL^T + refinement) against the
-// quad ABA on small cases (n <= kDenseMaxDofs): both are independent formulations.
-const double kTolRefDense = 1e-12;
+// quad ABA on small cases (n <= kDenseMaxDofs): both are independent formulations. The dense
+// solve's error follows cond(H): measured 5.5e-13 on the straight 100-link chain and 9.1e-13
+// on the near-singular one (where the double ABA is at 1.3e-16 and 4.4e-16: the dense
+// long-double reference is NOT accurate enough to judge a double solver on long chains),
+// 1.6e-14 on alternating masses, 4e-15 .. 5e-9 on near_eq (delta = 1e-6 .. 1e-12, where the
+// long-double ABA is as far off). Tolerance max(1e-11, 1e4 x long-double ABA vs quad).
+const double kTolRefDense = 1e-11;
 const int kDenseMaxDofs = 150;
 
 // ABA (the default exact solver): rel2 against the reference, per family. Measured on main
