@@ -162,17 +162,18 @@ def test_model_against_reference(path, hardref):
 # Regularized variants of the refused models, as a user would make them load: <mimic>
 # removed (the coupled joints become independent), and every inertia of a link with mass
 # made positive definite and physical: its symmetric part's principal moments raised to at
-# least REG_FLOOR x mass (kg m^2 per kg: a near-point mass, REG_FLOOR = 1e-10 m^2, i.e. a
-# radius of gyration of 1e-5 m) and to the triangle inequality. Near-point masses on real
-# robots: the "regularized humanoid" row.
-REG_FLOOR = 1e-10
+# least floor x mass (kg m^2 per kg: near-point masses; floor 1e-10 m^2 is a radius of
+# gyration of 10 um, 1e-16 m^2 one of 10 nm) and to the triangle inequality. Near-point
+# masses on real robots: the "regularized humanoid" row.
+REG_FLOORS = (1e-10, 1e-16)
 KNOWN_BAD_REGULARIZED = {
-    "allegro_right_hand.urdf+regularized", "icub.urdf+regularized",
-    "icub_reduced.urdf+regularized",
+    "icub.urdf+reg1e-10", "icub_reduced.urdf+reg1e-10", "b1.urdf+reg1e-10",
+    "icub.urdf+reg1e-16", "icub_reduced.urdf+reg1e-16", "panda.urdf+reg1e-16",
+    "talos_left_arm.urdf+reg1e-16",
 }
 
 
-def _regularize(path, out):
+def _regularize(path, out, floor):
     import xml.etree.ElementTree as ET
     tree = ET.parse(path)
     robot = tree.getroot()
@@ -192,7 +193,7 @@ def _regularize(path, out):
         inertia = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]],
                             [v["ixz"], v["iyz"], v["izz"]]])
         w, V = np.linalg.eigh(inertia)
-        w2 = np.maximum(w, REG_FLOOR * mass)
+        w2 = np.maximum(w, floor * mass)
         w2[2] = min(w2[2], w2[0] + w2[1])  # triangle inequality (sorted ascending)
         if np.allclose(w, w2, rtol=1e-9, atol=0):
             continue
@@ -214,11 +215,12 @@ for _p in URDFS or []:
         _L.close()
 
 
-@pytest.mark.parametrize("path", REFUSED, ids=[_model_id(p) + "+regularized" for p in REFUSED])
-def test_regularized_model_against_reference(path, hardref, tmp_path):
-    name = _model_id(path) + "+regularized"
+@pytest.mark.parametrize("floor", REG_FLOORS, ids=["reg%g" % f for f in REG_FLOORS])
+@pytest.mark.parametrize("path", REFUSED, ids=[_model_id(p) for p in REFUSED])
+def test_regularized_model_against_reference(path, floor, hardref, tmp_path):
+    name = _model_id(path) + "+reg%g" % floor
     out = str(tmp_path / "model.urdf")
-    _regularize(path, out)
+    _regularize(path, out, floor)
     L, why = _load(out)
     if L is None:
         pytest.skip("refused even regularized: " + why[len(out) + 2:])
