@@ -65,10 +65,14 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
     double *phi = t->data + nd->phi;
     const pose *P = t->poses + nd->poses;
     int32_t i, j;
-    if (nd->comp == L->m.ncomp) {
+    nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
+    nd->grounded = nd->comp == L->m.ncomp;
+    if (nd->grounded) {
         memset(phi, 0, sizeof(double) * 36 * nd->nh * nd->nh); /* the world does not move */
+        memset(t->data + nd->ic, 0, 36 * sizeof(double));
         return;
     }
+    memcpy(t->data + nd->ic, L->m.comp_inertia + 36 * nd->comp, 36 * sizeof(double));
     {
         const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
         double *Y = t->scratch; /* nh blocks X_h I^{-1} */
@@ -109,6 +113,251 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
     }
 }
 
+
+/* ---- Accurate Phi: rigid part from the composite inertia, internal part as
+ * a square-root factor (docs/math.md, "Accurate Phi").
+ *
+ * Phi of a node = G I^-1 G^T + Lambda Lambda^T, G the handles' motion
+ * transforms from the node frame, I the subassembly's composite inertia
+ * (a sum, formed without cancellation) and Lambda (6nh x rank) the mobility
+ * its internal joints add. Joining A and B at joint k: the two bodies'
+ * motions split into the common rigid motion (I_C = I_A + I_B) and the
+ * relative one, factored by Lm Lm^T = I_A^-1 + I_B^-1; the rows of the
+ * relative acceleration across k in the directions the joint does not free
+ * (Tc^T, Tc spanning S's orthogonal complement) are reduced by Householder
+ * reflections from the right, and what the outer rows keep beyond them is
+ * Lambda_C (compressed to 6nh columns the same way). Nothing is subtracted:
+ * Phi_C is a Gram matrix of reflected rows, so a rigid direction's tiny
+ * mobility (1/I of a long chain) keeps its relative accuracy, and a point
+ * mass's 1/k rotational mobility is removed by an orthogonal projection,
+ * not by a difference of 1/k-sized terms. */
+
+/* Reflect row r of the row-major A (ld columns) so that its entries in
+ * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
+ * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
+static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
+                        int32_t ncol, double *v)
+{
+    const double *x = A + (int64_t)ld * r + p;
+    int32_t m = ncol - p, i, j;
+    double scale = 0.0, ss = 0.0, alpha, f;
+    for (j = 1; j < m; j++)
+        if (fabs(x[j]) > scale) scale = fabs(x[j]);
+    if (scale == 0.0) return; /* nothing right of the pivot */
+    if (fabs(x[0]) > scale) scale = fabs(x[0]);
+    for (j = 0; j < m; j++) {
+        double y = x[j] / scale;
+        ss += y * y;
+    }
+    alpha = scale * sqrt(ss);
+    if (x[0] > 0.0) alpha = -alpha;
+    for (j = 0; j < m; j++) v[j] = x[j];
+    v[0] -= alpha; /* |v0| = |x0| + ||x||: no cancellation */
+    f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
+    for (i = r0; i < nrows; i++) {
+        double *a = A + (int64_t)ld * i + p, s = 0.0;
+        for (j = 0; j < m; j++) s += a[j] * v[j];
+        if (s == 0.0) continue;
+        s *= f;
+        for (j = 0; j < m; j++) a[j] -= s * v[j];
+    }
+}
+
+/* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
+ * row-major): columns q = 0 .. 5-d of Tc (row-major 6 x 6, column q). Gram-
+ * Schmidt twice over S's columns, then over the unit vectors, taking the
+ * largest remaining one each time. */
+static void complement(const double *S, int32_t d, double *Tc)
+{
+    double Q[36], v[6];
+    int32_t nq = 0, i, j, k, pass;
+    for (j = 0; j < d + 6 && nq < 6; j++) {
+        double best = -1.0, nv;
+        if (j < d) {
+            for (i = 0; i < 6; i++) v[i] = S[i * d + j];
+        } else {
+            int32_t bi = 0;
+            for (k = 0; k < 6; k++) { /* the unit vector least inside span(Q) */
+                double w[6] = {0, 0, 0, 0, 0, 0}, s2 = 0.0;
+                w[k] = 1.0;
+                for (pass = 0; pass < 2; pass++)
+                    for (i = 0; i < nq; i++) {
+                        double dot = 0.0;
+                        int32_t l;
+                        for (l = 0; l < 6; l++) dot += Q[6 * i + l] * w[l];
+                        for (l = 0; l < 6; l++) w[l] -= dot * Q[6 * i + l];
+                    }
+                for (i = 0; i < 6; i++) s2 += w[i] * w[i];
+                if (s2 > best) {
+                    best = s2;
+                    bi = k;
+                }
+            }
+            for (i = 0; i < 6; i++) v[i] = i == bi ? 1.0 : 0.0;
+        }
+        for (pass = 0; pass < 2; pass++)
+            for (i = 0; i < nq; i++) {
+                double dot = 0.0;
+                for (k = 0; k < 6; k++) dot += Q[6 * i + k] * v[k];
+                for (k = 0; k < 6; k++) v[k] -= dot * Q[6 * i + k];
+            }
+        nv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+        if (!(nv > 1e-8)) continue; /* a dependent column of S */
+        for (k = 0; k < 6; k++) Q[6 * nq + k] = v[k] / nv;
+        nq++;
+    }
+    for (j = 0; j < 6 - d; j++)
+        for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
+}
+
+/* Iinv = I^-1 by Cholesky (I symmetric positive definite); -1 if not. */
+static int inverse6(const double *I, double *Iinv)
+{
+    double Cf[36];
+    if (dense_cholesky6(I, Cf) != 0) return -1;
+    dense_cholesky6_inverse(Cf, Iinv);
+    dense_symmetrize(Iinv, 6);
+    return 0;
+}
+
+/* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
+ * column by column. */
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
+{
+    double col[6], o[6];
+    int32_t i, j;
+    for (j = 0; j < 6; j++) {
+        for (i = 0; i < 6; i++) col[i] = Z[6 * i + j];
+        spatial_xform_motion(P, col, o);
+        for (i = 0; i < 6; i++) out[(int64_t)ld * i + j] = o[i];
+    }
+}
+
+/* Node n's composite inertia, Lambda and Phi from its children's, for the
+ * principal joint's subspace S (6 x d). Returns 0, or -1 when a composite
+ * inertia is not positive definite. */
+static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
+    const pose *J = t->poses + C->J;
+    const double *IA = t->data + A->ic, *IBb = t->data + B->ic;
+    const double *LA = t->data + A->lam, *LB = t->data + B->lam;
+    double *IC = t->data + C->ic, *LC = t->data + C->lam, *phi = t->data + C->phi;
+    const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
+    const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
+    const int32_t rows = orows + c;
+    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = v + ncol;
+    double IB[36], IAi[36], IBi[36], Ms[36], Lm[36], Wm[36], ZA[36], ZB[36], Tc[36];
+    static const double id6[36] = {1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0,
+                                   0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1};
+    pose Pk, Pkb;
+    int32_t i, j, r, q, ci, rank;
+
+    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
+    pose_compose(&Pk, &PB[C->kb], &Pkb);
+    spatial_inertia_to_parent(&Pk, IBb, IB);
+    C->grounded = A->grounded || B->grounded;
+    for (i = 0; i < 36; i++) IC[i] = C->grounded ? 0.0 : IA[i] + IB[i];
+    if (A->grounded) memset(IAi, 0, sizeof IAi);
+    else if (inverse6(IA, IAi) != 0) return -1;
+    if (B->grounded) memset(IBi, 0, sizeof IBi);
+    else if (inverse6(IB, IBi) != 0) return -1;
+    for (i = 0; i < 36; i++) Ms[i] = IAi[i] + IBi[i];
+    dense_symmetrize(Ms, 6);
+    if (dense_cholesky6(Ms, Lm) != 0) return -1;
+    dense_cholesky6_lower_solve(Lm, id6, Wm, 6); /* Wm = Lm^-1 */
+    /* Z_A = I_A^-1 Lm^-T, Z_B = -I_B^-1 Lm^-T: the relative rigid mode's columns */
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double sa = 0.0, sb = 0.0;
+            for (r = 0; r < 6; r++) {
+                sa += IAi[6 * i + r] * Wm[6 * j + r];
+                sb += IBi[6 * i + r] * Wm[6 * j + r];
+            }
+            ZA[6 * i + j] = sa;
+            ZB[6 * i + j] = -sb;
+        }
+    memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (i = 0, ci = 0; i < nA; i++) {
+        if (i == C->ka) continue;
+        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6, LA + (int64_t)(6 * i + r) * ldA,
+                                       sizeof(double) * (size_t)rA);
+        ci++;
+    }
+    for (i = 0; i < nB; i++) {
+        if (i == C->kb) continue;
+        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6 + rA, LB + (int64_t)(6 * i + r) * ldB,
+                                       sizeof(double) * (size_t)rB);
+        ci++;
+    }
+    /* The relative acceleration across k (B's minus A's), in k's child frame. */
+    xform_cols(&Pkb, Lm, rel, ncol);
+    for (r = 0; r < 6; r++)
+        for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
+    for (j = 0; j < rA; j++) {
+        double col[6], o[6];
+        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
+        spatial_xform_motion(J, col, o);
+        for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
+    }
+    for (r = 0; r < 6; r++)
+        for (j = 0; j < rB; j++) rel[ncol * r + 6 + rA + j] = LB[(int64_t)(6 * C->kb + r) * ldB + j];
+    complement(S, d, Tc);
+    for (q = 0; q < c; q++) {
+        double *row = M + (int64_t)(orows + q) * ncol;
+        for (r = 0; r < 6; r++) {
+            double w = Tc[6 * r + q];
+            if (w == 0.0) continue;
+            for (j = 0; j < ncol; j++) row[j] += w * rel[ncol * r + j];
+        }
+    }
+    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, ncol, v);
+    /* What the outer rows keep right of the c pivots is Lambda_C, compressed
+     * to lower-trapezoidal form (at most 6nh columns). */
+    rank = ncol - c < orows ? ncol - c : orows;
+    for (i = 0; i < rank && i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+    for (r = 0; r < orows; r++) {
+        for (j = 0; j < rank; j++) LC[(int64_t)r * orows + j] = M[(int64_t)r * ncol + c + j];
+    }
+    C->rank = rank;
+    /* Phi_C = G I_C^-1 G^T + Lambda_C Lambda_C^T as one Gram matrix of the
+     * rows [G Lc^-T, Lambda_C] (I_C = Lc Lc^T). */
+    {
+        const int32_t w = 6 + rank;
+        double *R = M; /* orows x w */
+        if (C->grounded) {
+            for (r = 0; r < orows; r++)
+                for (j = 0; j < 6; j++) R[(int64_t)r * w + j] = 0.0;
+        } else {
+            double Lc[36], Wc[36], WcT[36];
+            if (dense_cholesky6(IC, Lc) != 0) return -1;
+            dense_cholesky6_lower_solve(Lc, id6, Wc, 6);
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < 6; j++) WcT[6 * i + j] = Wc[6 * j + i];
+            for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], WcT, R + (int64_t)6 * ci * w, w);
+        }
+        for (r = 0; r < orows; r++)
+            for (j = 0; j < rank; j++) R[(int64_t)r * w + 6 + j] = LC[(int64_t)r * orows + j];
+        for (ci = 0; ci < nh; ci++)
+            for (i = ci; i < nh; i++) {
+                double *out = blk(phi, nh, ci, i);
+                int32_t a, b2;
+                for (a = 0; a < 6; a++)
+                    for (b2 = 0; b2 < 6; b2++) {
+                        const double *x = R + (int64_t)(6 * ci + a) * w, *y = R + (int64_t)(6 * i + b2) * w;
+                        double s = 0.0;
+                        for (j = 0; j < w; j++) s += x[j] * y[j];
+                        out[6 * a + b2] = s;
+                    }
+            }
+        symmetrize_blocks(phi, nh, 0);
+    }
+    return 0;
+}
 
 /* y = C^{-1} m for the lower-triangular 6x6 factor C (forward substitution). */
 static void lower_solve_row6(const double *Cf, const double *m, double *y)
@@ -159,11 +408,11 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const pose *J = t->poses + C->J;
     double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
     double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
-    double *M = t->mscratch, *phi = t->data + C->phi, *bC = t->data + C->bv;
+    double *M = t->mscratch, *bC = t->data + C->bv;
     const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
-    int32_t nAo = nA - 1, i, j, ci, cj;
+    int32_t nAo = nA - 1, i, j, ci;
     double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
 
     /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
@@ -250,47 +499,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
                 dense_mul(Z, Dinv, ZD, 6 * nh, d, d); /* Z D^{-1} */
             }
         }
-        for (ci = 0; ci < nh; ci++)
-            for (cj = ci; cj < nh; cj++) {
-                double *out = blk(phi, nh, ci, cj);
-                int same = (ci < nAo) == (cj < nAo);
-                const double *base =
-                    !same ? NULL
-                    : ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
-                               : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
-                if (d == 1 && ci == cj) {
-                    /* a diagonal block is symmetric: its upper triangle only */
-                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj, *y = Y + 36 * ci;
-                    int r, c, k;
-                    for (r = 0; r < 6; r++)
-                        for (c = r; c < 6; c++) {
-                            double sum = 0.0;
-                            for (k = 0; k < 6; k++) sum += y[6 * r + k] * y[6 * c + k];
-                            out[6 * r + c] = out[6 * c + r] = zd[r] * z[c] - sum + base[6 * r + c];
-                        }
-                } else if (d == 1) {
-                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj;
-                    int r, c;
-                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
-                    for (r = 0; r < 6; r++)
-                        for (c = 0; c < 6; c++) out[6 * r + c] = zd[r] * z[c] - out[6 * r + c];
-                    if (base)
-                        for (i = 0; i < 36; i++) out[i] += base[i];
-                } else if (d < 6) {
-                    int r, c, k;
-                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
-                    for (r = 0; r < 6; r++)
-                        for (c = 0; c < 6; c++) {
-                            double sum = 0.0;
-                            for (k = 0; k < d; k++) sum += ZD[(6 * ci + r) * d + k] * Z[(6 * cj + c) * d + k];
-                            out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + sum;
-                        }
-                    if (ci == cj) dense_symmetrize(out, 6);
-                } else {
-                    for (i = 0; i < 36; i++) out[i] = base ? base[i] : 0.0;
-                }
-            }
-        symmetrize_blocks(phi, nh, 0); /* diagonal blocks were formed symmetric */
+        if (hybrid_phi(L, n, S, d) != 0) return -1;
         for (ci = 0; ci < nh; ci++) {
             const double *src = ci < nAo ? bA + 6 * child_index(ci, ka) : bB + 6 * child_index(ci - nAo, kb);
             dense_matvec6(M + 36 * ci, gamma, tmp);

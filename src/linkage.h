@@ -35,6 +35,11 @@ typedef struct {
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
     int64_t W;            /* Cholesky factor C of T = V^{-1} (6x6 lower); W = V - V S U */
     int64_t U, VS, rho, gamma, S; /* §3.4: U (d x 6), V S (6 x d), rho (d), gamma (6), S (6 x d) */
+    int64_t ic;           /* composite spatial inertia of the subassembly (6x6, node frame) */
+    int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
+                             + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
+    int32_t rank;         /* columns of Lambda (0 for leaves) */
+    int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
     int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
@@ -56,6 +61,8 @@ typedef struct {
     int32_t height, max_handles;
     double mean_handles;
     double *scratch;  /* 84 * (max_handles + 2) doubles */
+    double *hscratch; /* (6 max_handles + 13) x (12 max_handles + 6): the stacked factor of
+                         dca_node_update, its reflection vector and relative rows */
     double *mscratch; /* 36 * (max_handles + 1): M = [Phi^A_ok X^T; -Phi^B_ok] of the node
                          being updated (6nh x 6), not stored per node */
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
