@@ -4,6 +4,7 @@
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
 #   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
+#   make bench-hard     hard-case suite, long mode (docs/hardcases.md); check-hard: quick, in check
 #   make install    PREFIX=/usr/local DESTDIR=
 #   make deps       install the Debian/PyPI packages that are missing
 
@@ -91,7 +92,7 @@ $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.h
 	@echo "  CXX     $<"
 	@$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-c check-reference check-python check-install check-bench
+check: check-symbols check-c check-reference check-hard check-python check-install check-bench
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
 
 check-symbols: $(SHLIB)
@@ -110,9 +111,30 @@ PY_ENV := LD_PRELOAD="$$($(CC) -print-file-name=libasan.so) $$($(CC) -print-file
 else
 PY_ENV :=
 endif
-check-python: $(SHLIB) $(BUILD)/bench/urdf_export
+# The hard-case suite of issue 12 (tests/reference/hardcases.cpp, docs/hardcases.md): every
+# solver against an extended-precision (__float128) reference. check-hard: quick mode
+# (< 60 s); bench-hard: chains to 10^6 links (~GBs, tens of minutes), JSON Lines in
+# docs/hardcases/. hardref.so: the same reference for Python (tests/python/test_real_models.py).
+HARDCASES := $(BUILD)/tests/reference/hardcases
+HARDREF_SO := $(BUILD)/tests/reference/libhardref.so
+$(HARDCASES): tests/reference/hardcases.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
+	@mkdir -p $(dir $@)
+	@echo "  CXX     $<"
+	@$(CXX) $(CXXFLAGS_TEST) -fext-numeric-literals -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs -lquadmath $(LDLIBS)
+$(HARDREF_SO): tests/reference/hardref_c.cpp tests/reference/hard_reference.hpp $(SHLIB)
+	@mkdir -p $(dir $@)
+	@echo "  CXX     $<"
+	@$(CXX) $(CXXFLAGS_TEST) -fext-numeric-literals -shared -fPIC -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs -lquadmath $(LDLIBS)
+.PHONY: check-hard bench-hard
+check-hard: $(HARDCASES)
+	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick.jsonl
+bench-hard: $(HARDCASES)
+	@mkdir -p docs/hardcases
+	$(HARDCASES) --long --json docs/hardcases/long.jsonl | tee docs/hardcases/long.txt
+
+check-python: $(SHLIB) $(BUILD)/bench/urdf_export $(HARDREF_SO)
 	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
-	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) \
+	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) AQS_HARDREF=$(abspath $(HARDREF_SO)) \
 	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
 
 check-install: lib

@@ -53,6 +53,10 @@ pip_install() {
         $PY -m pip install -q "$@"
     fi
 }
+# The real-model corpus of tests/python/test_real_models.py: 69 robot URDFs (a 131 MB wheel
+# with meshes; no Python dependency beyond cmeel).
+$PY -c "import importlib.metadata as m; m.distribution('example-robot-data')" 2>/dev/null \
+    || pymissing+=(example-robot-data)
 if [ ${#pymissing[@]} -gt 0 ]; then
     echo "deps: pip installing ${pymissing[*]}"
     pip_install "${pymissing[@]}"

@@ -1,0 +1,883 @@
+// hardcases.cpp -- the hard-case suite of issue 12: every exact and adaptive solver of the
+// library against an extended-precision reference (hard_reference.hpp) on seeded families
+// of numerically hard linkages.
+//
+//   build/tests/reference/hardcases [--long] [--json FILE] [--only SUBSTRING] [--ref quad|ld]
+//
+// Quick mode (default; `make check-hard`, part of `make check`): sizes up to 2,000 links,
+// well under 60 s. Long mode (--long; `make bench-hard`): chains to 10^6 links (the
+// reference there in long double past 10^5 links unless --ref quad), results recorded in
+// docs/hardcases.md.
+//
+// Per case: the reference qdd in __float128 (and in long double: their difference is the
+// long-double reference's own error, asserted tiny), then the library's
+//   ABA    exact, articulated-body algorithm (the default exact solver)
+//   DCA    exact, aqs_linkage_set_exact_solver(AQS_EXACT_DCA)
+//   adaptive, each of the four AQS_METRIC_* at eps = 2^-1, 2^-5, 2^-10, 2^-19, 2^-30
+// with, for exact solves, rel2 = ||qdd - ref|| / ||ref|| and relmax = max_j ||qdd_j - ref_j||
+// / max_j ||ref_j||, and for adaptive solves the TRUE value of the solve's measure, i.e.
+// the measure's formula applied to the error qdd - ref over every counted joint (an
+// uncomputed joint reads 0, so its error is ||ref_j||; a computed one carries the DCA's
+// rounding), next to the reported error_bound: "bound holds" means true <= error_bound.
+// Also printed: "skip", the measure over the uncomputed joints alone against the reference
+// (what the bound claims in exact arithmetic).
+//
+// Assertions (quick mode): the thresholds table below. Cases marked known_bad for a solver
+// are measured and REPORTED (line "KNOWN_BAD ... fails/passes") but not asserted; one that
+// passes anyway is reported as "XPASS" so its flag can be flipped. Exit status non-zero on
+// any asserted failure; the last line is "N passed, M failed".
+#include <aqs.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dense_reference.hpp"
+#include "hard_reference.hpp"
+
+using hardref::quad;
+
+namespace {
+
+// =======================================================================================
+// Thresholds (the lead tightens these once the DCA fix lands; docs/hardcases.md)
+// =======================================================================================
+
+// The reference itself: the same algorithm in long double against __float128, relative
+// 2-norm. Their difference is the long-double solve's error (the quad one is 2^49 ~ 5.6e14
+// times smaller in the same conditioning), so a pass at 1e-6 means the quad reference is
+// good to ~2e-21, far below any double solver's error. Measured: <= 2e-17 except near_eq
+// (qdd a small difference, ~ delta): up to ~1e-8 at delta = 1e-12.
+const double kTolRefLdVsQuad = 1e-6;
+// Dense long-double reference (dense_reference.hpp, Eigen LDL^T + refinement) against the
+// quad ABA on small cases (n <= kDenseMaxDofs): both are independent formulations.
+const double kTolRefDense = 1e-12;
+const int kDenseMaxDofs = 150;
+
+// ABA (the default exact solver): rel2 against the reference, per family. Measured on main
+// at 90aa04b (docs/hardcases.md): worst 2e-11 on near_eq (its answer is a small difference,
+// qdd ~ delta), below 1e-13 elsewhere.
+// near_eq's qdd is a difference of size ~delta relative to its terms, so every solver's
+// relative error grows like u / delta: its tolerance is max(aba, kNearEqAba / delta)
+// (measured: ABA 0.05..0.1 x u / delta for delta = 1e-6..1e-12).
+struct FamilyTol {
+    const char *family;
+    double aba;  // rel2 bound for the ABA
+};
+const double kNearEqAba = 1.1e-16;
+const FamilyTol kTolAba[] = {
+    {"chain", 1e-12},   {"pointmass", 1e-12}, {"altmass", 1e-11}, {"near_eq", 1e-12},
+    {"lightdistal", 1e-11}, {"prismatic", 1e-11}, {"floating", 1e-11},
+};
+
+// DCA (exact) and adaptive: the issue's target is "within 10x of the ABA's error".
+// DCA:      status AQS_OK and rel2 <= kDcaVsAba * max(ABA rel2, kErrFloor).
+// adaptive: status AQS_OK and true <= error_bound * (1 + 1e-9) + rounding allowance,
+//           allowance = kAdaptiveRounding * max(the ABA's error in the same measure,
+//           kErrFloor * scale) (scale = 1 for the relative measures, the reference's norm
+//           for the absolute ones). Once the bound covers rounding (issue 12, item 2) the
+//           allowance can go to 0.
+const double kDcaVsAba = 10.0;
+const double kAdaptiveRounding = 10.0;
+const double kErrFloor = 1e-15;
+
+// Known-bad cases on main at 90aa04b: measured and reported, not asserted. A case is known
+// bad for a solver when its name starts with one of these prefixes. Flip (remove) them once
+// the fix lands; a known-bad case that passes prints XPASS.
+struct KnownBad {
+    const char *prefix;
+    bool dca;       // exact DCA
+    bool adaptive;  // adaptive solves and their bound
+    const char *why;
+};
+const KnownBad kKnownBad[] = {
+    {"pointmass/chain6/", true, true, "Phi ~ 1/k: DCA error ~ 1e-17/k"},
+    {"altmass/", true, true, "mass ratio: DCA error ~ 1e-15 x ratio^(1/2..1)"},
+    {"near_eq/", true, true, "DCA 1000-2700x the ABA's error"},
+    {"prismatic/n=100000", true, true, "DCA 65-115x the ABA's error"},
+    {"prismatic/n=100", true, false, "DCA 65x the ABA's error (adaptive passes)"},
+    {"prismatic/", true, true, "DCA 65-115x the ABA's error"},
+    {"floating/", true, true, "tiny base inertia: DCA error ~ 1e-17/k"},
+    // Long mode only (make bench-hard): AQS_ENUMERIC from 13,000 links on for the straight
+    // chain (the folded one and the near-singular one up to 16,384 links are fine).
+    {"chain/straight/g/n=13000", true, true, "ENUMERIC"},
+    {"chain/straight/tip/n=13000", true, true, "ENUMERIC"},
+    {"chain/straight/g/n=16384", true, true, "ENUMERIC"},
+    {"chain/straight/tip/n=16384", true, true, "ENUMERIC"},
+    {"chain/straight/g/n=100000", true, true, "ENUMERIC"},
+    {"chain/straight/tip/n=100000", true, true, "ENUMERIC"},
+    {"chain/nearsing/g+tip/n=100000", true, true, "ENUMERIC"},
+    {"chain/straight/g/n=1000000", true, true, "ENUMERIC"},
+    {"chain/straight/tip/n=1000000", true, true, "ENUMERIC"},
+    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+09/n=10000", true, true, "mass ratio"},
+};
+
+const double kEps[] = {0.5, 1.0 / 32, 1.0 / 1024, 1.0 / 524288, 1.0 / 1073741824.0};
+const char *kEpsName[] = {"2^-1", "2^-5", "2^-10", "2^-19", "2^-30"};
+const char *kMetricName[] = {"abs_linkage", "rel_linkage", "abs_joint", "rel_joint"};
+
+// =======================================================================================
+// Random numbers (splitmix64: same sequence on every machine)
+// =======================================================================================
+struct Rng {
+    uint64_t s;
+    explicit Rng(uint64_t seed) : s(seed * 0x9E3779B97F4A7C15ull + 12345) {}
+    uint64_t next() {
+        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    double uniform(double a, double b) { return a + (b - a) * ((next() >> 11) * 0x1.0p-53); }
+    int below(int n) { return (int)(next() % (uint64_t)n); }
+};
+
+// =======================================================================================
+// Building a case through aqs.h, recording the loads for the reference
+// =======================================================================================
+struct Case {
+    std::string family, name;
+    aqs_linkage *l = nullptr;
+    hardref::Loads loads;
+    std::string build_error;  // non-empty: the library refused the model (reported)
+    ~Case() { aqs_linkage_destroy(l); }
+};
+
+struct Builder {
+    Case &c;
+    explicit Builder(Case &cs) : c(cs) {
+        if (aqs_linkage_create(&c.l) != AQS_OK) throw std::runtime_error("create failed");
+    }
+    bool ok() const { return c.build_error.empty(); }
+    void fail(const char *what) {
+        (void)what;
+        if (ok()) c.build_error = aqs_linkage_last_error(c.l);
+    }
+    int32_t body(double m, const double com[3], double ixx, double iyy, double izz) {
+        const double I[9] = {ixx, 0, 0, 0, iyy, 0, 0, 0, izz};
+        int32_t b = -1;
+        if (aqs_body_add(c.l, m, com, I, &b) != AQS_OK) fail("aqs_body_add");
+        return b;
+    }
+    int32_t joint(int32_t type, int32_t parent, int32_t child, const double pos[3],
+                  const double quat[4], const double axis[3]) {
+        int32_t j = -1;
+        if (ok() && aqs_joint_add(c.l, type, parent, child, pos, quat, axis, &j) != AQS_OK)
+            fail("aqs_joint_add");
+        return j;
+    }
+    void finalize() {
+        if (ok() && aqs_linkage_finalize(c.l) != AQS_OK) fail("aqs_linkage_finalize");
+    }
+    void gravity(double x, double y, double z) {
+        c.loads.gravity[0] = x;
+        c.loads.gravity[1] = y;
+        c.loads.gravity[2] = z;
+        if (ok() && aqs_linkage_set_gravity(c.l, c.loads.gravity) != AQS_OK) fail("set_gravity");
+    }
+    void force(int32_t b, double fx, double fy, double fz, double px, double py, double pz) {
+        hardref::BodyLoad f = {b, {fx, fy, fz}, {px, py, pz}, {0, 0, 0}};
+        c.loads.body.push_back(f);
+        if (ok() && aqs_body_set_force(c.l, b, f.force, f.point, f.torque) != AQS_OK)
+            fail("set_force");
+    }
+    void positions(const std::vector<double> &q) {
+        if (ok() && aqs_linkage_set_positions(c.l, q.data(), q.size()) != AQS_OK)
+            fail("set_positions");
+    }
+};
+
+const double kQuat1[4] = {1, 0, 0, 0};
+const double kAxisX[3] = {1, 0, 0}, kAxisY[3] = {0, 1, 0}, kAxisZ[3] = {0, 0, 1};
+
+void random_quat(Rng &r, double q[4]) {
+    double n = 0;
+    do {
+        for (int i = 0; i < 4; ++i) q[i] = r.uniform(-1, 1);
+        n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    } while (n < 0.1 || n > 1);
+    for (int i = 0; i < 4; ++i) q[i] /= n;
+}
+void random_unit(Rng &r, double a[3]) {
+    double n = 0;
+    do {
+        for (int i = 0; i < 3; ++i) a[i] = r.uniform(-1, 1);
+        n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    } while (n < 0.1 || n > 1);
+    for (int i = 0; i < 3; ++i) a[i] /= n;
+}
+
+// (a) The README's chain with N raised: planar, revolute axes all z, 1 kg links of 1 m,
+// com (0.5,0,0), inertia diag(0.01,0.1,0.1). shape: "straight" (q = 0), "folded" (q
+// uniform in (-pi, pi)), "nearsing" (q uniform in (-1e-8, 1e-8)); load: "g" gravity
+// (0,-9.81,0), "tip" 1 N along y at the tip, "g+tip".
+void build_chain(Case &c, int n, const std::string &shape, const std::string &load,
+                 uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double com[3] = {0.5, 0, 0};
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < n; ++i) {
+        const int32_t b = B.body(1.0, com, 0.01, 0.1, 0.1);
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, kAxisZ);
+        prev = b;
+    }
+    B.finalize();
+    std::vector<double> q(n, 0.0);
+    if (shape == "folded")
+        for (double &x : q) x = r.uniform(-M_PI, M_PI);
+    else if (shape == "nearsing")
+        for (double &x : q) x = r.uniform(-1e-8, 1e-8);
+    B.positions(q);
+    if (load.find('g') != std::string::npos) B.gravity(0, -9.81, 0);
+    if (load.find("tip") != std::string::npos) B.force(prev, 0, 1, 0, 1, 0, 0);
+}
+
+// (b) Near-point mass in a 6-link spatial chain (axes z, y, z, y, ...; q uniform in (-1,1)):
+// body 2 is 0.75 kg with rotational inertia k I (com (0.5,0,0)); the others as in (a).
+// weld = true: the 0.75 kg body is instead welded by a fixed joint at the tip of body 2
+// (the rigid group stays non-singular), so k = 0 is allowed there.
+void build_pointmass(Case &c, double k, bool weld, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double com[3] = {0.5, 0, 0};
+    int32_t prev = AQS_WORLD, b2 = -1;
+    for (int i = 0; i < 6; ++i) {
+        const bool pm = i == 2 && !weld;
+        const int32_t b = pm ? B.body(0.75, com, k, k, k) : B.body(1.0, com, 0.01, 0.1, 0.1);
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, i % 2 ? kAxisY : kAxisZ);
+        if (i == 2) b2 = b;
+        prev = b;
+    }
+    if (weld) {
+        const double c0[3] = {0, 0, 0}, pos[3] = {1.0, 0, 0};
+        const int32_t p = B.body(0.75, c0, k, k, k);
+        B.joint(AQS_JOINT_FIXED, b2, p, pos, kQuat1, nullptr);
+    }
+    B.finalize();
+    std::vector<double> q(6);
+    for (double &x : q) x = r.uniform(-1, 1);
+    B.positions(q);
+    B.gravity(0, 0, -9.81);
+    B.force(prev, 0.3, 1, 0.5, 1, 0, 0);
+}
+
+// (c) Chain of n links with masses alternating 1 and ratio (inertias scale with the mass),
+// axes alternating z and y, q uniform in (-0.5, 0.5), hanging: gravity along +x (the
+// straight chain's direction).
+void build_altmass(Case &c, int n, double ratio, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double com[3] = {0.5, 0, 0};
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < n; ++i) {
+        const double m = i % 2 ? ratio : 1.0;
+        const int32_t b = B.body(m, com, 0.01 * m, 0.1 * m, 0.1 * m);
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, i % 2 ? kAxisY : kAxisZ);
+        prev = b;
+    }
+    B.finalize();
+    std::vector<double> q(n);
+    for (double &x : q) x = r.uniform(-0.5, 0.5);
+    B.positions(q);
+    B.gravity(9.81, 0, 0);
+}
+
+// Random tree of n bodies: revolute joints with random axes and frames, parent the previous
+// body with probability 0.7, else a random earlier one; masses 0.5..2 with box inertias.
+void random_tree(Builder &B, Rng &r, int n) {
+    for (int i = 0; i < n; ++i) {
+        const double m = r.uniform(0.5, 2.0);
+        const double x = r.uniform(0.2, 1.5), y = r.uniform(0.05, 0.3), z = r.uniform(0.05, 0.3);
+        const double com[3] = {r.uniform(0.2, 0.8), r.uniform(-0.1, 0.1), r.uniform(-0.1, 0.1)};
+        const int32_t b =
+            B.body(m, com, m / 12 * (y * y + z * z), m / 12 * (x * x + z * z), m / 12 * (x * x + y * y));
+        const int32_t parent = i == 0 ? AQS_WORLD : (r.uniform(0, 1) < 0.7 ? i - 1 : r.below(i));
+        const double pos[3] = {i ? r.uniform(0.5, 1.5) : 0.0, r.uniform(-0.3, 0.3), r.uniform(-0.3, 0.3)};
+        double quat[4], axis[3];
+        random_quat(r, quat);
+        random_unit(r, axis);
+        B.joint(AQS_JOINT_REVOLUTE, parent, b, pos, quat, axis);
+    }
+}
+
+// (d) Near equilibrium: a random 120-body tree under gravity (0,0,-9.81), joint forces
+// tau = tau0 + delta * max|tau0| * U(-1,1), with tau0 (computed in __float128 from the model
+// read back through the C API) the forces that make qdd = 0 exactly.
+void build_near_eq(Case &c, double delta, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const int n = 120;
+    random_tree(B, r, n);
+    B.finalize();
+    std::vector<double> q(n);
+    for (double &x : q) x = r.uniform(-M_PI, M_PI);
+    B.positions(q);
+    B.gravity(0, 0, -9.81);
+    if (!B.ok()) return;
+    const hardref::ModelData md = hardref::read_model(c.l);
+    const hardref::Result<quad> t0 = hardref::solve<quad>(md, c.loads, true);
+    quad mx = 0;
+    for (quad v : t0.tau0) mx = std::max(mx, hardref::M<quad>::fabs(v));
+    c.loads.tau.resize(md.nv);
+    for (int j = 0; j < md.nv; ++j) {
+        c.loads.tau[j] = (double)(t0.tau0[j] + (quad)delta * mx * (quad)r.uniform(-1, 1));
+        if (aqs_joint_set_force(c.l, j, &c.loads.tau[j], 1) != AQS_OK) B.fail("joint_set_force");
+    }
+}
+
+// (e1) Near-zero masses behind massive ones: 20 links of 1000 kg, then 20 of mass mu
+// (inertias scaled), axes alternating z/y, q in (-1, 1), gravity and a tip force of mu N.
+void build_lightdistal(Case &c, double mu, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double com[3] = {0.5, 0, 0};
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < 40; ++i) {
+        const double m = i < 20 ? 1000.0 : mu;
+        const int32_t b = B.body(m, com, 0.01 * m, 0.1 * m, 0.1 * m);
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, i % 2 ? kAxisY : kAxisZ);
+        prev = b;
+    }
+    B.finalize();
+    std::vector<double> q(40);
+    for (double &x : q) x = r.uniform(-1, 1);
+    B.positions(q);
+    B.gravity(0, 0, -9.81);
+    B.force(prev, 0, mu, 0, 1, 0, 0);
+}
+
+// (e2) Long prismatic chain: n prismatic joints, random joint-frame orientations and axes
+// (so consecutive axes are neither parallel nor orthogonal), 1 kg bodies, q in (-1, 1),
+// gravity and a tip force.
+void build_prismatic(Case &c, int n, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double com[3] = {0.1, 0, 0};
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < n; ++i) {
+        const int32_t b = B.body(1.0, com, 0.01, 0.02, 0.025);
+        const double pos[3] = {i ? 0.2 : 0.0, 0, 0};
+        double quat[4], axis[3];
+        random_quat(r, quat);
+        random_unit(r, axis);
+        B.joint(AQS_JOINT_PRISMATIC, prev, b, pos, quat, axis);
+        prev = b;
+    }
+    B.finalize();
+    std::vector<double> q(n);
+    for (double &x : q) x = r.uniform(-1, 1);
+    B.positions(q);
+    B.gravity(0, 0, -9.81);
+    B.force(prev, 1, 2, 3, 0, 0, 0);
+}
+
+// (e3) Floating base with tiny inertia: a free root body of 1 kg with rotational inertia
+// k I, and 4 legs of 6 revolute links (1 kg, 1 m) in random directions; gravity and a force
+// on each leg's tip.
+void build_floating(Case &c, double k, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    const double c0[3] = {0, 0, 0}, com[3] = {0.5, 0, 0};
+    const int32_t base = B.body(1.0, c0, k, k, k);
+    B.joint(AQS_JOINT_FREE, AQS_WORLD, base, c0, kQuat1, nullptr);
+    std::vector<int32_t> tips;
+    for (int leg = 0; leg < 4; ++leg) {
+        int32_t prev = base;
+        for (int i = 0; i < 6; ++i) {
+            const int32_t b = B.body(1.0, com, 0.01, 0.1, 0.1);
+            double pos[3] = {1.0, 0, 0}, quat[4] = {1, 0, 0, 0};
+            if (i == 0) {
+                for (double &x : pos) x = r.uniform(-0.2, 0.2);
+                random_quat(r, quat);
+            }
+            B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, quat, i % 2 ? kAxisY : kAxisZ);
+            prev = b;
+        }
+        tips.push_back(prev);
+    }
+    B.finalize();
+    int32_t nq = 0;
+    aqs_linkage_get_sizes(c.l, nullptr, nullptr, &nq, nullptr);
+    std::vector<double> q(nq, 0.0);
+    if (B.ok()) {
+        aqs_linkage_get_positions(c.l, q.data(), q.size());
+        for (int i = 7; i < nq; ++i) q[i] = r.uniform(-1, 1);
+    }
+    B.positions(q);
+    B.gravity(0, 0, -9.81);
+    for (int32_t t : tips) B.force(t, r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1), 1, 0, 0);
+}
+
+// =======================================================================================
+// Case list
+// =======================================================================================
+struct Spec {
+    std::string family, name;
+    std::function<void(Case &)> build;
+    int size;
+    double delta;  // near_eq only
+};
+
+std::string fmt(const char *f, double x) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, x);
+    return b;
+}
+
+std::vector<Spec> make_specs(bool long_mode) {
+    std::vector<Spec> s;
+    auto add = [&](const std::string &fam, const std::string &name, int size,
+                   std::function<void(Case &)> f) { s.push_back({fam, fam + "/" + name, f, size, 0.0}); };
+    std::vector<int> chain_n = {100, 1000, 2000};
+    if (long_mode) chain_n = {100, 1000, 2000, 10000, 12000, 13000, 16384, 100000, 1000000};
+    for (int n : chain_n) {
+        add("chain", "straight/g/n=" + std::to_string(n), n,
+            [=](Case &c) { build_chain(c, n, "straight", "g", 1); });
+        add("chain", "straight/tip/n=" + std::to_string(n), n,
+            [=](Case &c) { build_chain(c, n, "straight", "tip", 1); });
+        if (n <= 100000) {
+            add("chain", "folded/g/n=" + std::to_string(n) + "/seed=1", n,
+                [=](Case &c) { build_chain(c, n, "folded", "g", 1); });
+            add("chain", "nearsing/g+tip/n=" + std::to_string(n) + "/seed=1", n,
+                [=](Case &c) { build_chain(c, n, "nearsing", "g+tip", 1); });
+        }
+    }
+    for (double k : {1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-15, 1e-16})
+        add("pointmass", "chain6/k=" + fmt("%.0e", k), 6, [=](Case &c) { build_pointmass(c, k, false, 1); });
+    for (double k : {1e-12, 1e-16, 0.0})
+        add("pointmass", "weld/k=" + fmt("%.0e", k), 7, [=](Case &c) { build_pointmass(c, k, true, 1); });
+    std::vector<int> alt_n = {100, 1000};
+    if (long_mode) alt_n.push_back(10000);
+    for (int n : alt_n)
+        for (double ratio : {1e3, 1e6, 1e9})
+            add("altmass", "r=" + fmt("%.0e", ratio) + "/n=" + std::to_string(n), n,
+                [=](Case &c) { build_altmass(c, n, ratio, 1); });
+    for (double d : {1e-6, 1e-8, 1e-10, 1e-12})
+        for (uint64_t seed : {1ull, 2ull})
+            add("near_eq", "delta=" + fmt("%.0e", d) + "/seed=" + std::to_string(seed), 120,
+                [=](Case &c) { build_near_eq(c, d, seed); }), s.back().delta = d;
+    for (double mu : {1e-6, 1e-9, 1e-12})
+        add("lightdistal", "mu=" + fmt("%.0e", mu), 40, [=](Case &c) { build_lightdistal(c, mu, 1); });
+    std::vector<int> pr_n = {100, 2000};
+    if (long_mode) pr_n = {100, 2000, 100000};
+    for (int n : pr_n)
+        add("prismatic", "n=" + std::to_string(n), n, [=](Case &c) { build_prismatic(c, n, 1); });
+    for (double k : {1e-4, 1e-8, 1e-12})
+        add("floating", "k=" + fmt("%.0e", k), 25, [=](Case &c) { build_floating(c, k, 1); });
+    return s;
+}
+
+// =======================================================================================
+// Measuring
+// =======================================================================================
+struct JointSlots {
+    std::vector<int32_t> off, nv;
+    std::vector<bool> counted;  // not free, not fixed
+};
+JointSlots slots(const hardref::ModelData &m) {
+    JointSlots s;
+    for (const auto &J : m.joints) {
+        s.off.push_back(J.v_off);
+        s.nv.push_back(J.nv);
+        s.counted.push_back(J.type != AQS_JOINT_FREE && J.type != AQS_JOINT_FIXED);
+    }
+    return s;
+}
+double jnorm(const std::vector<double> &x, int32_t off, int32_t nv) {
+    double s = 0;
+    for (int i = 0; i < nv; ++i) s += x[off + i] * x[off + i];
+    return std::sqrt(s);
+}
+double jdiff(const std::vector<double> &x, const std::vector<double> &y, int32_t off, int32_t nv) {
+    double s = 0;
+    for (int i = 0; i < nv; ++i) s += (x[off + i] - y[off + i]) * (x[off + i] - y[off + i]);
+    return std::sqrt(s);
+}
+
+struct ExactErr {
+    double rel2 = NAN, relmax = NAN;
+};
+ExactErr exact_err(const std::vector<double> &x, const std::vector<double> &ref, const JointSlots &js) {
+    double d2 = 0, r2 = 0, dm = 0, rm = 0;
+    for (size_t j = 0; j < js.off.size(); ++j) {
+        const double d = jdiff(x, ref, js.off[j], js.nv[j]), r = jnorm(ref, js.off[j], js.nv[j]);
+        d2 += d * d;
+        r2 += r * r;
+        dm = std::max(dm, d);
+        rm = std::max(rm, r);
+    }
+    ExactErr e;
+    e.rel2 = std::sqrt(d2) / (r2 > 0 ? std::sqrt(r2) : 1);
+    e.relmax = dm / (rm > 0 ? rm : 1);
+    return e;
+}
+// The measure `metric` of the error x - ref over counted joints (all = true) or of ref over
+// the uncomputed joints (all = false: what the bound claims).
+double measure(int metric, const std::vector<double> &x, const std::vector<double> &ref,
+               const JointSlots &js, const std::vector<int32_t> &computed, bool all) {
+    double s2 = 0, mx = 0, n2 = 0, nm = 0;
+    for (size_t j = 0; j < js.off.size(); ++j) {
+        if (!js.counted[j]) continue;
+        const double r = jnorm(ref, js.off[j], js.nv[j]);
+        n2 += r * r;
+        nm = std::max(nm, r);
+        double e;
+        if (all)
+            e = jdiff(x, ref, js.off[j], js.nv[j]);
+        else
+            e = computed[j] ? 0.0 : r;
+        s2 += e * e;
+        mx = std::max(mx, e);
+    }
+    switch (metric) {
+    case AQS_METRIC_ABS_LINKAGE: return std::sqrt(s2);
+    case AQS_METRIC_REL_LINKAGE: return n2 > 0 ? std::sqrt(s2) / std::sqrt(n2) : std::sqrt(s2);
+    case AQS_METRIC_ABS_JOINT: return mx;
+    default: return nm > 0 ? mx / nm : mx;
+    }
+}
+double ref_scale(int metric, const std::vector<double> &ref, const JointSlots &js) {
+    std::vector<int32_t> none(js.off.size(), 0);
+    std::vector<double> zero(ref.size(), 0.0);
+    if (metric == AQS_METRIC_ABS_LINKAGE || metric == AQS_METRIC_ABS_JOINT)
+        return measure(metric, zero, ref, js, none, true);  // ||ref|| in that norm
+    return 1.0;
+}
+
+const KnownBad *known_bad(const std::string &name) {
+    for (const KnownBad &k : kKnownBad)
+        if (name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return &k;
+    return nullptr;
+}
+
+std::string jstr(const std::string &s) {
+    std::string o = "\"";
+    for (char ch : s) {
+        if (ch == '"' || ch == '\\') o += '\\';
+        if ((unsigned char)ch < 0x20) continue;
+        o += ch;
+    }
+    return o + "\"";
+}
+std::string jnum(double x) {
+    if (!std::isfinite(x)) return "null";
+    char b[40];
+    std::snprintf(b, sizeof b, "%.6g", x);
+    return b;
+}
+
+struct Tally {
+    int passed = 0, failed = 0, known_bad_fail = 0, xpass = 0;
+};
+
+double now() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+aqsref::Model dense_model(const hardref::ModelData &m, const hardref::Loads &L) {
+    aqsref::Model d;
+    for (const auto &b : m.bodies) {
+        aqsref::Body B;
+        B.mass = b.mass;
+        for (int i = 0; i < 3; ++i) B.com[i] = b.com[i];
+        for (int i = 0; i < 9; ++i) B.inertia[i] = b.inertia[i];
+        d.bodies.push_back(B);
+    }
+    for (const auto &J : m.joints) {
+        aqsref::Joint D;
+        D.type = J.type;
+        D.parent = J.parent;
+        D.child = J.child;
+        for (int i = 0; i < 3; ++i) D.pos[i] = J.pos[i], D.axis[i] = J.axis[i];
+        for (int i = 0; i < 4; ++i) D.quat[i] = J.quat[i];
+        d.joints.push_back(D);
+    }
+    d.positions = m.q;
+    for (int i = 0; i < 3; ++i) d.gravity[i] = L.gravity[i];
+    for (const auto &f : L.body) {
+        aqsref::BodyForce F;
+        F.body = f.body;
+        for (int i = 0; i < 3; ++i) F.force[i] = f.force[i], F.point[i] = f.point[i], F.torque[i] = f.torque[i];
+        d.body_forces.push_back(F);
+    }
+    if (!L.tau.empty())
+        for (size_t j = 0; j < m.joints.size(); ++j) {
+            aqsref::JointForce F;
+            F.joint = (int)j;
+            for (int k = 0; k < m.joints[j].nv; ++k) F.tau.push_back(L.tau[m.joints[j].v_off + k]);
+            d.joint_forces.push_back(F);
+        }
+    return d;
+}
+
+// Closed form: one revolute rod under gravity, qdd = m g_perp c / (Izz + m c^2) (signs from
+// the geometry), in __float128, against the quad ABA. Returns the relative difference.
+double pendulum_check() {
+    Case c;
+    c.family = "self";
+    Builder B(c);
+    const double com[3] = {0.5, 0, 0};
+    const int32_t b = B.body(2.0, com, 0.01, 0.1, 0.1);
+    B.joint(AQS_JOINT_REVOLUTE, AQS_WORLD, b, com /*unused pos*/, kQuat1, kAxisZ);
+    B.finalize();
+    const double q = 0.7;
+    B.positions({q});
+    B.gravity(0, -9.81, 0);
+    if (!B.ok()) throw std::runtime_error(c.build_error);
+    const hardref::ModelData md = hardref::read_model(c.l);
+    const quad ref = hardref::solve<quad>(md, c.loads).qdd[0];
+    // Torque about z of gravity at the com (0.5 cos q, 0.5 sin q) relative to the joint:
+    // tau = x F_y = 0.5 cos q * (-9.81 * 2); inertia about the axis 0.1 + 2 * 0.25.
+    const quad exact = (quad)0.5 * cosq((quad)q) * (quad)(-9.81) * 2 / ((quad)0.1 + 2 * (quad)0.25);
+    return (double)(fabsq(ref - exact) / fabsq(exact));
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    bool long_mode = false;
+    std::string json_path, only, ref_kind = "auto";
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--long") long_mode = true;
+        else if (a == "--json" && i + 1 < argc) json_path = argv[++i];
+        else if (a == "--only" && i + 1 < argc) only = argv[++i];
+        else if (a == "--ref" && i + 1 < argc) ref_kind = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: %s [--long] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld]\n", argv[0]);
+            return 2;
+        }
+    }
+    FILE *json = nullptr;
+    if (!json_path.empty()) {
+        json = std::fopen(json_path.c_str(), "w");
+        if (!json) {
+            std::fprintf(stderr, "cannot write %s\n", json_path.c_str());
+            return 2;
+        }
+    }
+    Tally t;
+    auto verdict = [&](bool ok, bool kb, const std::string &what) {
+        if (kb) {
+            if (ok) {
+                ++t.xpass;
+                std::printf("  XPASS %s (known_bad, passes now: flip its flag)\n", what.c_str());
+            } else {
+                ++t.known_bad_fail;
+                std::printf("  KNOWN_BAD %s\n", what.c_str());
+            }
+            return;
+        }
+        if (ok) ++t.passed;
+        else {
+            ++t.failed;
+            std::printf("  FAIL %s\n", what.c_str());
+        }
+    };
+
+    // Self-checks of the reference.
+    {
+        const double pend = pendulum_check();
+        std::printf("reference self-check: pendulum closed form vs quad ABA: %.2e\n", pend);
+        verdict(pend < 1e-30, false, "reference/pendulum closed form " + fmt("%.2e", pend));
+    }
+
+    const double t_start = now();
+    std::printf("%-42s %8s %9s %9s %-30s %-11s %-11s %-11s %-11s %s\n", "case", "dofs",
+                "ref ld/q", "ABA rel", "DCA rel (status)", "abs_link", "rel_link", "abs_joint",
+                "rel_joint", "  (adaptive: worst true/bound over eps; x = fails)");
+    for (const Spec &sp : make_specs(long_mode)) {
+        if (!only.empty() && sp.name.find(only) == std::string::npos) continue;
+        const double t0 = now();
+        Case c;
+        c.family = sp.family;
+        c.name = sp.name;
+        sp.build(c);
+        const KnownBad *kb = known_bad(sp.name);
+        if (!c.build_error.empty()) {
+            std::printf("%-42s refused by the library: %s\n", sp.name.c_str(), c.build_error.c_str());
+            if (json)
+                std::fprintf(json, "{\"case\":%s,\"family\":%s,\"refused\":%s}\n", jstr(sp.name).c_str(),
+                             jstr(sp.family).c_str(), jstr(c.build_error).c_str());
+            continue;
+        }
+        const hardref::ModelData md = hardref::read_model(c.l);
+        const JointSlots js = slots(md);
+        // Reference: quad up to 2e5 dofs (or when asked), long double always.
+        const bool use_quad = ref_kind == "quad" || (ref_kind == "auto" && md.nv <= 200000);
+        const bool use_ld = ref_kind != "quad";
+        std::vector<double> ref, ref_ld;
+        double ld_vs_q = NAN;
+        if (use_ld) ref_ld = hardref::to_double(hardref::solve<long double>(md, c.loads).qdd);
+        if (use_quad) {
+            ref = hardref::to_double(hardref::solve<quad>(md, c.loads).qdd);
+            if (use_ld) {
+                ld_vs_q = exact_err(ref_ld, ref, js).rel2;
+                verdict(ld_vs_q <= kTolRefLdVsQuad, false,
+                        sp.name + " reference long double vs quad " + fmt("%.2e", ld_vs_q));
+            }
+        } else {
+            ref = ref_ld;
+        }
+        if (md.nv <= kDenseMaxDofs && !long_mode) {
+            const aqsref::Solution ds = aqsref::solve(dense_model(md, c.loads));
+            std::vector<double> dq(md.nv);
+            for (int i = 0; i < md.nv; ++i) dq[i] = (double)ds.qdd(i);
+            const double e = exact_err(dq, ref, js).rel2;
+            // The dense solve's own error grows like the long-double ABA's (cond(H) and the
+            // cancellation in qdd ~ delta on near_eq): allowed max(kTolRefDense, 1e4 x ld vs q).
+            verdict(e <= std::max(kTolRefDense, 1e4 * (std::isfinite(ld_vs_q) ? ld_vs_q : 0.0)), false,
+                    sp.name + " reference dense long double vs quad " + fmt("%.2e", e));
+        }
+        double tol_aba = 1e-12;
+        for (const FamilyTol &f : kTolAba)
+            if (sp.family == f.family) tol_aba = f.aba;
+        if (sp.delta > 0) tol_aba = std::max(tol_aba, kNearEqAba / sp.delta);
+
+        std::vector<double> qdd(md.nv);
+        // ABA
+        aqs_linkage_set_exact_solver(c.l, AQS_EXACT_ABA);
+        aqs_status st = aqs_linkage_solve(c.l);
+        ExactErr aba;
+        if (st == AQS_OK) {
+            aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
+            aba = exact_err(qdd, ref, js);
+        }
+        const std::vector<double> qdd_aba = qdd;
+        verdict(st == AQS_OK && aba.rel2 <= tol_aba, false,
+                sp.name + " ABA status " + aqs_status_string(st) + " rel2 " + fmt("%.2e", aba.rel2) +
+                    " (tol " + fmt("%.0e", tol_aba) + ")");
+        if (json)
+            std::fprintf(json, "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"aba\",\"status\":%d,"
+                         "\"rel2\":%s,\"relmax\":%s,\"ref_ld_vs_quad\":%s,\"ref\":%s}\n",
+                         jstr(sp.name).c_str(), jstr(sp.family).c_str(), md.nv, st, jnum(aba.rel2).c_str(),
+                         jnum(aba.relmax).c_str(), jnum(ld_vs_q).c_str(), use_quad ? "\"quad\"" : "\"ld\"");
+        // DCA
+        st = aqs_linkage_set_exact_solver(c.l, AQS_EXACT_DCA);
+        std::string dca_msg;
+        ExactErr dca;
+        if (st == AQS_OK) st = aqs_linkage_solve(c.l);
+        if (st == AQS_OK) {
+            aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
+            dca = exact_err(qdd, ref, js);
+        } else {
+            dca_msg = aqs_linkage_last_error(c.l);
+        }
+        const bool dca_ok = st == AQS_OK && dca.rel2 <= kDcaVsAba * std::max(aba.rel2, kErrFloor);
+        verdict(dca_ok, kb && kb->dca,
+                sp.name + " DCA status " + aqs_status_string(st) + " rel2 " + fmt("%.2e", dca.rel2) +
+                    " vs ABA " + fmt("%.2e", aba.rel2) + (dca_msg.empty() ? "" : " (" + dca_msg + ")"));
+        if (json)
+            std::fprintf(json, "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"dca\",\"status\":%d,"
+                         "\"message\":%s,\"rel2\":%s,\"relmax\":%s,\"known_bad\":%s}\n",
+                         jstr(sp.name).c_str(), jstr(sp.family).c_str(), md.nv, st, jstr(dca_msg).c_str(),
+                         jnum(dca.rel2).c_str(), jnum(dca.relmax).c_str(), kb && kb->dca ? "true" : "false");
+        char dcacol[64];
+        if (st == AQS_OK) std::snprintf(dcacol, sizeof dcacol, "%9.2e (ok)", dca.rel2);
+        else std::snprintf(dcacol, sizeof dcacol, "%s", aqs_status_string(st));
+        aqs_linkage_set_exact_solver(c.l, AQS_EXACT_ABA);
+
+        // Adaptive: per metric, the worst true/bound over eps.
+        std::string cols[4], kb_first;
+        int kb_checks = 0, kb_fails = 0;
+        std::vector<int32_t> computed(md.joints.size());
+        // Adaptive solves up to 10^5 dofs (past that only the exact solvers: make bench-hard).
+        for (int metric = 0; metric < 4 && md.nv <= 100000; ++metric) {
+            double worst = 0;
+            int fails = 0, bad_status = 0, with_bound = 0;
+            const double scale = ref_scale(metric, ref, js);
+            const double aba_meas = measure(metric, qdd_aba, ref, js, computed, true);
+            const double allowance = kAdaptiveRounding * std::max(aba_meas, kErrFloor * scale);
+            for (int e = 0; e < 5; ++e) {
+                aqs_status s = aqs_linkage_set_tolerance(c.l, metric, kEps[e]);
+                if (s == AQS_OK) s = aqs_linkage_solve(c.l);
+                aqs_solve_stats stats;
+                std::memset(&stats, 0, sizeof stats);
+                stats.size = sizeof stats;
+                double tru = NAN, skip = NAN;
+                std::string msg;
+                if (s == AQS_OK) {
+                    aqs_linkage_get_stats(c.l, &stats);
+                    aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
+                    for (size_t j = 0; j < md.joints.size(); ++j) aqs_joint_get_computed(c.l, (int32_t)j, &computed[j]);
+                    tru = measure(metric, qdd, ref, js, computed, true);
+                    skip = measure(metric, qdd, ref, js, computed, false);
+                    // Worst true/bound over the solves that skipped joints (bound > 0); a
+                    // solve that computed every joint (bound 0) is judged by the allowance.
+                    if (stats.error_bound > 0) {
+                        worst = std::max(worst, tru / stats.error_bound);
+                        ++with_bound;
+                    }
+                } else {
+                    msg = aqs_linkage_last_error(c.l);
+                    ++bad_status;
+                }
+                const bool ok = s == AQS_OK && tru <= stats.error_bound * (1 + 1e-9) + allowance;
+                if (!ok) ++fails;
+                if (kb && kb->adaptive) {
+                    // Known bad: one line per case (below), not one per solve.
+                    ++kb_checks;
+                    if (!ok) {
+                        ++kb_fails;
+                        if (kb_first.empty())
+                            kb_first = std::string(kMetricName[metric]) + " eps " + kEpsName[e] + ": true " +
+                                       fmt("%.2e", tru) + " bound " + fmt("%.2e", stats.error_bound) +
+                                       (msg.empty() ? "" : " (" + msg + ")");
+                    }
+                } else
+                    verdict(ok, false,
+                        sp.name + " adaptive " + kMetricName[metric] + " eps " + kEpsName[e] + " status " +
+                            aqs_status_string(s) + " true " + fmt("%.2e", tru) + " bound " +
+                            fmt("%.2e", stats.error_bound) + " (allowance " + fmt("%.1e", allowance) + ")" +
+                            (msg.empty() ? "" : " (" + msg + ")"));
+                if (json)
+                    std::fprintf(json,
+                                 "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"adaptive\",\"metric\":%s,"
+                                 "\"eps\":%s,\"status\":%d,\"message\":%s,\"error_bound\":%s,\"true\":%s,"
+                                 "\"skip\":%s,\"computed\":%d,\"counted\":%d,\"holds\":%s,\"allowance\":%s,\"ok\":%s,"
+                                 "\"known_bad\":%s}\n",
+                                 jstr(sp.name).c_str(), jstr(sp.family).c_str(), md.nv,
+                                 jstr(kMetricName[metric]).c_str(), jnum(kEps[e]).c_str(), s, jstr(msg).c_str(),
+                                 jnum(stats.error_bound).c_str(), jnum(tru).c_str(), jnum(skip).c_str(),
+                                 stats.computed_joints, stats.counted_joints,
+                                 s == AQS_OK && tru <= stats.error_bound ? "true" : "false",
+                                 jnum(allowance).c_str(), ok ? "true" : "false",
+                                 kb && kb->adaptive ? "true" : "false");
+            }
+            char b[64];
+            if (bad_status == 5) std::snprintf(b, sizeof b, "ENUMERIC");
+            else if (with_bound == 0) std::snprintf(b, sizeof b, "-%s", fails ? "x" : "");
+            else std::snprintf(b, sizeof b, "%.1e%s", worst, fails ? "x" : "");
+            cols[metric] = b;
+            aqs_linkage_set_tolerance(c.l, metric, 0.0);
+        }
+        if (kb_checks > 0)
+            verdict(kb_fails == 0, true,
+                    sp.name + " adaptive: " + std::to_string(kb_fails) + " of " + std::to_string(kb_checks) +
+                        " solves fail" + (kb_first.empty() ? "" : ", first " + kb_first));
+        std::printf("%-42s %8d %9.1e %9.2e %-30s %-11s %-11s %-11s %-11s %s%s(%.1f s)\n", sp.name.c_str(), md.nv,
+                    ld_vs_q, aba.rel2, dcacol, cols[0].c_str(), cols[1].c_str(), cols[2].c_str(), cols[3].c_str(),
+                    kb ? "known_bad " : "", kb ? (std::string("[") + kb->why + "] ").c_str() : "", now() - t0);
+        std::fflush(stdout);
+    }
+    if (json) std::fclose(json);
+    std::printf("total %.1f s; %d known-bad checks failing (not asserted), %d known-bad passing (XPASS)\n",
+                now() - t_start, t.known_bad_fail, t.xpass);
+    std::printf("%d passed, %d failed\n", t.passed, t.failed);
+    return t.failed ? 1 : 0;
+}
