@@ -364,8 +364,8 @@ static void layout(tree *t)
         n->lam = pool_take(&t->ndata, 36 * h * h);
         if (n->joint >= 0) {
             n->J = pool_take(&t->nposes, 1);
-            n->W = pool_take(&t->ndata, 36);
-            n->U = pool_take(&t->ndata, 6 * n->d);
+            n->W = pool_take(&t->ndata, 36 * h);
+            n->U = pool_take(&t->ndata, 6 * n->d * h);
             n->VS = pool_take(&t->ndata, 6 * n->d);
             n->rho = pool_take(&t->ndata, n->d);
             n->gamma = pool_take(&t->ndata, 6);
@@ -450,7 +450,7 @@ aqs_status assembly_build(aqs_linkage *L)
     /* dca_node_update: Y (6nh x 6) + Z and Z D^-1 (6nh x d, d <= 6 each) = 108 nh doubles */
     t->scratch = lk_calloc(L, 108 * (size_t)(t->max_handles + 2), sizeof(double));
     t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
-    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 13) * (12 * (size_t)t->max_handles + 6),
+    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6),
                             sizeof(double));
     t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));

@@ -18,10 +18,10 @@ static double *blk(double *phi, int32_t nh, int32_t i, int32_t j)
     return phi + 36 * ((int64_t)nh * i + j);
 }
 
-static const double *cblk(const double *phi, int32_t nh, int32_t i, int32_t j)
-{
-    return phi + 36 * ((int64_t)nh * i + j);
-}
+static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp);
+static int mp_inverse_factor(const double *mp, double *Y);
+static int mp_inverse(const double *mp, double *Iinv);
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
 
 static void transpose6(const double *A, double *T)
 {
@@ -72,20 +72,29 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
         memset(t->data + nd->ic, 0, 36 * sizeof(double));
         return;
     }
-    memcpy(t->data + nd->ic, L->m.comp_inertia + 36 * nd->comp, 36 * sizeof(double));
+    mp_of_comp(L, nd->comp, t->data + nd->ic);
     {
-        const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
-        double *Y = t->scratch; /* nh blocks X_h I^{-1} */
-        double *X = t->scratch + 36 * nd->nh;
-        for (i = 0; i < nd->nh; i++) {
-            spatial_from_parent(&P[i], X);
-            dense_mul66(X, Iinv, Y + 36 * i);
+        /* Phi_{hh'} = X_h I^{-1} X_h'^T = (X_h Y)(X_h' Y)^T, I^-1 = Y Y^T */
+        double Y[36], *F = t->scratch; /* nh blocks X_h Y */
+        if (mp_inverse_factor(t->data + nd->ic, Y) != 0) {
+            /* not positive definite: finalize's check let it through; keep
+             * the old inverse (the solve reports the singularity) */
+            const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
+            double X[36];
+            for (i = 0; i < nd->nh; i++) {
+                spatial_from_parent(&P[i], X);
+                dense_mul66(X, Iinv, F + 36 * i);
+            }
+            for (j = 0; j < nd->nh; j++) {
+                spatial_from_parent(&P[j], X);
+                for (i = 0; i <= j; i++) dense_mul66_nt(F + 36 * i, X, blk(phi, nd->nh, i, j));
+            }
+            symmetrize_blocks(phi, nd->nh, 1);
+            return;
         }
-        /* Phi_{hh'} = X_h I^{-1} X_h'^T */
-        for (j = 0; j < nd->nh; j++) {
-            spatial_from_parent(&P[j], X);
-            for (i = 0; i <= j; i++) dense_mul66_nt(Y + 36 * i, X, blk(phi, nd->nh, i, j));
-        }
+        for (i = 0; i < nd->nh; i++) xform_cols(&P[i], Y, F + 36 * i, 6);
+        for (j = 0; j < nd->nh; j++)
+            for (i = 0; i <= j; i++) dense_mul66_nt(F + 36 * i, F + 36 * j, blk(phi, nd->nh, i, j));
         symmetrize_blocks(phi, nd->nh, 1);
     }
 }
@@ -105,7 +114,9 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         acc[4] = -L->gravity[1];
         acc[5] = -L->gravity[2];
     } else {
-        dense_matvec(L->m.comp_inverse + 36 * nd->comp, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
+        double Iinv[36];
+        if (mp_inverse(t->data + nd->ic, Iinv) != 0) memcpy(Iinv, L->m.comp_inverse + 36 * nd->comp, sizeof Iinv);
+        dense_matvec(Iinv, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
     }
     for (i = 0; i < nd->nh; i++) {
         spatial_from_parent(&P[i], X);
@@ -113,6 +124,134 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
     }
 }
 
+
+/* ---- Mass properties: a node's composite inertia is kept as mass, centre of
+ * mass and rotational inertia about it (mp[0] = m, mp[1..3] = c, mp[4..12] =
+ * Ic, 3x3 row-major; node frame), combined by the two-body parallel-axis rule
+ * (only sums of positive terms), and inverted through the centre of mass:
+ * I^-1 = E^T diag(Ic^-1, 1/m) E exactly, so neither a lever arm nor a tiny
+ * Ic costs digits (a 6x6 Cholesky of I in a far frame does). */
+
+/* acc += (m2, c2, I2): the two-body rule Ic = I1 + I2 + (m1 m2 / m) (|e|^2 - e e^T), e = c2 - c1. */
+static void mp_add(double *acc, double m2, const double c2[3], const double I2[9])
+{
+    double m1 = acc[0], m = m1 + m2, e[3], f, e2;
+    int i, j;
+    if (m1 == 0.0) {
+        acc[0] = m2;
+        memcpy(acc + 1, c2, 3 * sizeof(double));
+        memcpy(acc + 4, I2, 9 * sizeof(double));
+        return;
+    }
+    for (i = 0; i < 3; i++) e[i] = c2[i] - acc[1 + i];
+    f = m1 * m2 / m;
+    e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) acc[4 + 3 * i + j] += I2[3 * i + j] + f * ((i == j ? e2 : 0.0) - e[i] * e[j]);
+    for (i = 0; i < 3; i++) acc[1 + i] = (m1 * acc[1 + i] + m2 * c2[i]) / m;
+    acc[0] = m;
+    for (i = 0; i < 3; i++) /* exactly symmetric */
+        for (j = i + 1; j < 3; j++) acc[4 + 3 * j + i] = acc[4 + 3 * i + j];
+}
+
+/* acc += mp given in a frame with pose P in acc's frame. */
+static void mp_add_posed(double *acc, const pose *P, const double *mp)
+{
+    double c[3], RI[9], I[9];
+    int i, j, k;
+    mat3_vec(P->R, mp + 1, c);
+    for (i = 0; i < 3; i++) c[i] += P->p[i];
+    for (i = 0; i < 3; i++) /* R Ic R^T */
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += P->R[3 * i + k] * mp[4 + 3 * k + j];
+            RI[3 * i + j] = s;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += RI[3 * i + k] * P->R[3 * j + k];
+            I[3 * i + j] = I[3 * j + i] = s;
+        }
+    mp_add(acc, mp[0], c, I);
+}
+
+/* The composite's mass properties in its frame (its root body's), from its bodies. */
+static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp)
+{
+    const model *m = &L->m;
+    int32_t k;
+    memset(mp, 0, 13 * sizeof(double));
+    for (k = m->member_start[comp]; k < m->member_start[comp + 1]; k++) {
+        int32_t b = m->members[k];
+        const body_def *bd = &L->bodies[b];
+        double one[13];
+        one[0] = bd->mass;
+        memcpy(one + 1, bd->com, 3 * sizeof(double));
+        memcpy(one + 4, bd->inertia, 9 * sizeof(double));
+        mp_add_posed(mp, &m->body_in_comp[b], one);
+    }
+}
+
+/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
+ * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
+static int mp_inverse_factor(const double *mp, double *Y)
+{
+    const double m = mp[0], *c = mp + 1, *Ic = mp + 4;
+    double l00, l10, l11, l20, l21, l22, Li[9], Jc[9], S[9];
+    int i, j, k;
+    if (!(m > 0.0)) return -1;
+    l00 = Ic[0];
+    if (!(l00 > 0.0)) return -1;
+    l00 = sqrt(l00);
+    l10 = Ic[3] / l00;
+    l11 = Ic[4] - l10 * l10;
+    if (!(l11 > 0.0)) return -1;
+    l11 = sqrt(l11);
+    l20 = Ic[6] / l00;
+    l21 = (Ic[7] - l20 * l10) / l11;
+    l22 = Ic[8] - l20 * l20 - l21 * l21;
+    if (!(l22 > 0.0) || !isfinite(l22)) return -1;
+    l22 = sqrt(l22);
+    /* Li = Lc^-1 (lower) */
+    memset(Li, 0, sizeof Li);
+    Li[0] = 1.0 / l00;
+    Li[4] = 1.0 / l11;
+    Li[8] = 1.0 / l22;
+    Li[3] = -l10 * Li[0] / l11;
+    Li[7] = -l21 * Li[4] / l22;
+    Li[6] = -(l20 * Li[0] + l21 * Li[3]) / l22;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) Jc[3 * i + j] = Li[3 * j + i];
+    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
+    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
+    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
+    memset(Y, 0, 36 * sizeof(double));
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            Y[6 * i + j] = Jc[3 * i + j];
+            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
+            Y[6 * (3 + i) + j] = s;
+        }
+    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = 1.0 / sqrt(m);
+    return 0;
+}
+
+/* I^-1 = Y Y^T, exactly symmetric. */
+static int mp_inverse(const double *mp, double *Iinv)
+{
+    double Y[36];
+    int i, j, k;
+    if (mp_inverse_factor(mp, Y) != 0) return -1;
+    for (i = 0; i < 6; i++)
+        for (j = i; j < 6; j++) {
+            double s = 0.0;
+            for (k = 0; k < 6; k++) s += Y[6 * i + k] * Y[6 * j + k];
+            Iinv[6 * i + j] = Iinv[6 * j + i] = s;
+        }
+    return 0;
+}
 
 /* ---- Accurate Phi: rigid part from the composite inertia, internal part as
  * a square-root factor (docs/math.md, "Accurate Phi").
@@ -210,16 +349,6 @@ static void complement(const double *S, int32_t d, double *Tc)
         for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
 }
 
-/* Iinv = I^-1 by Cholesky (I symmetric positive definite); -1 if not. */
-static int inverse6(const double *I, double *Iinv)
-{
-    double Cf[36];
-    if (dense_cholesky6(I, Cf) != 0) return -1;
-    dense_cholesky6_inverse(Cf, Iinv);
-    dense_symmetrize(Iinv, 6);
-    return 0;
-}
-
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
  * column by column. */
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
@@ -233,10 +362,132 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
     }
 }
 
+
+/* The joint's coefficients of node n from the rows reduced by the constraint
+ * reflections (all ncol wide): X = [X1 X2] the outer rows, Lc the first c
+ * columns of the c constraint rows (lower triangular), K = [K1 K2] the
+ * reflected L_k. With E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
+ *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Sd^T K2 X2^T,
+ *   U = Sd^T (1 - K1 E),  rho = -U beta + Sd^T K2 K2^T Sd Q,
+ *   gamma = E^T E beta + U^T Q,
+ *   b_C = b_o + X2 K2^T Sd Q + X1 E beta,
+ * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
+ * products of reduced factors only, no large mobility subtracted from
+ * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b. */
+static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *X,
+                              const double *Lc, const double *K, int32_t ncol, const double beta[6],
+                              const double *Q, const double *bo)
+{
+    tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
+    double *bC = t->data + C->bv;
+    const int32_t c = 6 - d, orows = 6 * C->nh;
+    double E[36], U[36], Tc[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
+    int32_t i, j, k, r, o;
+    complement(S, d, Tc);
+    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
+    for (j = 0; j < 6; j++)
+        for (i = 0; i < c; i++) {
+            double x = Tc[6 * j + i];
+            double piv = Lc[(int64_t)i * ncol + i];
+            for (k = 0; k < i; k++) x -= Lc[(int64_t)i * ncol + k] * E[6 * k + j];
+            if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
+            E[6 * i + j] = x / piv;
+        }
+    /* Sd = S (S^T S)^-1 */
+    for (i = 0; i < d; i++)
+        for (j = 0; j < d; j++) {
+            double x = 0.0;
+            for (k = 0; k < 6; k++) x += S[k * d + i] * S[k * d + j];
+            StS[d * i + j] = x;
+        }
+    if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < d; j++) {
+            double x = 0.0;
+            for (k = 0; k < d; k++) x += S[i * d + k] * StSi[d * k + j];
+            Sd[i * d + j] = x;
+        }
+    /* P6 = 1 - K1 E; U = Sd^T P6 */
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double x = i == j ? 1.0 : 0.0;
+            for (k = 0; k < c; k++) x -= K[(int64_t)i * ncol + k] * E[6 * k + j];
+            P6[6 * i + j] = x;
+        }
+    for (r = 0; r < d; r++)
+        for (j = 0; j < 6; j++) {
+            double x = 0.0;
+            for (k = 0; k < 6; k++) x += Sd[k * d + r] * P6[6 * k + j];
+            U[6 * r + j] = x;
+        }
+    for (k = 0; k < c; k++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
+        Eb[k] = x;
+    }
+    /* FX = -E^T X1^T, and b_o + X1 E beta */
+    for (o = 0; o < orows; o++) {
+        const double *x1 = X + (int64_t)o * ncol;
+        double sb = 0.0;
+        for (i = 0; i < 6; i++) {
+            double x = 0.0;
+            for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
+            FX[(int64_t)i * orows + o] = x;
+        }
+        for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
+        bC[o] = bo[o] + sb;
+    }
+    /* K2 (6 x (ncol - c)) against Sd: kSd = K2^T Sd per column; G2 = Sd^T K2 K2^T Sd,
+     * QX = -Sd^T K2 X2^T, b_C += X2 K2^T Sd Q */
+    memset(G2, 0, sizeof G2);
+    for (i = 0; i < d * orows; i++) QX[i] = 0.0;
+    for (k = c; k < ncol; k++) {
+        double kq = 0.0;
+        for (r = 0; r < d; r++) {
+            double x = 0.0;
+            for (i = 0; i < 6; i++) x += K[(int64_t)i * ncol + k] * Sd[i * d + r];
+            kSd[r] = x;
+            kq += x * Q[r];
+        }
+        for (r = 0; r < d; r++)
+            for (j = 0; j < d; j++) G2[d * r + j] += kSd[r] * kSd[j];
+        for (o = 0; o < orows; o++) {
+            double x2 = X[(int64_t)o * ncol + k];
+            if (x2 == 0.0) continue;
+            for (r = 0; r < d; r++) QX[(int64_t)r * orows + o] -= kSd[r] * x2;
+            bC[o] += x2 * kq;
+        }
+    }
+    for (r = 0; r < d; r++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
+        for (j = 0; j < d; j++) x += G2[d * r + j] * Q[j];
+        rho[r] = x;
+        if (!isfinite(x)) return -1;
+    }
+    for (i = 0; i < 6; i++) {
+        double x = 0.0;
+        for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
+        for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
+        w[i] = x;
+    }
+    memcpy(gamma, w, sizeof w);
+    return 0;
+}
+
 /* Node n's composite inertia, Lambda and Phi from its children's, for the
- * principal joint's subspace S (6 x d). Returns 0, or -1 when a composite
- * inertia is not positive definite. */
-static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
+ * principal joint's subspace S (6 x d), and the joint's coefficients from the
+ * same reduction: with L_k the rows of the relative acceleration across k
+ * (T = L_k L_k^T), reflected into [K1 K2] while Tc^T L_k becomes [Lc 0]:
+ * E = Lc^-1 Tc^T (W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T), U = Sd^T (1 - K1 E),
+ * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
+ * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
+ * composite inertia is not positive definite or the joint cannot take a
+ * constraint force (Lc singular). */
+static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
+                      const double *Q)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
@@ -248,38 +499,55 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
     double *IC = t->data + C->ic, *LC = t->data + C->lam, *phi = t->data + C->phi;
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
-    const int32_t rows = orows + c;
-    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = v + ncol;
-    double IB[36], IAi[36], IBi[36], Ms[36], Lm[36], Wm[36], ZA[36], ZB[36], Tc[36];
-    static const double id6[36] = {1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0,
-                                   0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1};
+    const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
+    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = M + (int64_t)(orows + c) * ncol;
+    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36];
     pose Pk, Pkb;
     int32_t i, j, r, q, ci, rank;
 
     pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
     pose_compose(&Pk, &PB[C->kb], &Pkb);
-    spatial_inertia_to_parent(&Pk, IBb, IB);
+    memset(IB, 0, sizeof IB);
+    mp_add_posed(IB, &Pk, IBb);
     C->grounded = A->grounded || B->grounded;
-    for (i = 0; i < 36; i++) IC[i] = C->grounded ? 0.0 : IA[i] + IB[i];
-    if (A->grounded) memset(IAi, 0, sizeof IAi);
-    else if (inverse6(IA, IAi) != 0) return -1;
-    if (B->grounded) memset(IBi, 0, sizeof IBi);
-    else if (inverse6(IB, IBi) != 0) return -1;
-    for (i = 0; i < 36; i++) Ms[i] = IAi[i] + IBi[i];
-    dense_symmetrize(Ms, 6);
-    if (dense_cholesky6(Ms, Lm) != 0) return -1;
-    dense_cholesky6_lower_solve(Lm, id6, Wm, 6); /* Wm = Lm^-1 */
-    /* Z_A = I_A^-1 Lm^-T, Z_B = -I_B^-1 Lm^-T: the relative rigid mode's columns */
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double sa = 0.0, sb = 0.0;
-            for (r = 0; r < 6; r++) {
-                sa += IAi[6 * i + r] * Wm[6 * j + r];
-                sb += IBi[6 * i + r] * Wm[6 * j + r];
+    memset(IC, 0, 13 * sizeof(double));
+    if (!C->grounded) {
+        memcpy(IC, IA, 13 * sizeof(double));
+        mp_add(IC, IB[0], IB + 1, IB + 4);
+    }
+    /* The relative rigid mode, in square-root form: [Y_A Y_B] (I_A^-1 = Y_A Y_A^T,
+     * I_B^-1 = Y_B Y_B^T; zero for the world) reflected from the right into
+     * [Lm 0], Lm Lm^T = I_A^-1 + I_B^-1, with H = [H1a; H1b] the first six
+     * columns of the reflection: Z_A = I_A^-1 Lm^-T = Y_A H1a and Z_B =
+     * -I_B^-1 Lm^-T = -Y_B H1b, no inverse formed or summed. */
+    {
+        double Yr[18 * 12], vr[12], YA[36], YB[36];
+        if (A->grounded) memset(YA, 0, sizeof YA);
+        else if (mp_inverse_factor(IA, YA) != 0) return -1;
+        if (B->grounded) memset(YB, 0, sizeof YB);
+        else if (mp_inverse_factor(IB, YB) != 0) return -1;
+        memset(Yr, 0, sizeof Yr);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                Yr[12 * i + j] = YA[6 * i + j];
+                Yr[12 * i + 6 + j] = YB[6 * i + j];
             }
-            ZA[6 * i + j] = sa;
-            ZB[6 * i + j] = -sb;
-        }
+        for (i = 0; i < 12; i++) Yr[12 * (6 + i) + i] = 1.0;
+        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 18, i, i, 12, vr);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                double sa = 0.0, sb = 0.0;
+                Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
+                for (r = 0; r < 6; r++) {
+                    sa += YA[6 * i + r] * Yr[12 * (6 + r) + j];
+                    sb += YB[6 * i + r] * Yr[12 * (12 + r) + j];
+                }
+                ZA[6 * i + j] = sa;
+                ZB[6 * i + j] = -sb;
+            }
+        for (i = 0; i < 6; i++)
+            if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+    }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
     for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
     for (i = 0, ci = 0; i < nA; i++) {
@@ -316,6 +584,16 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
         }
     }
     for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, ncol, v);
+    {
+        /* b of the outer handles, in C's handle order */
+        double *bo = v + ncol; /* 6 nh doubles after the reflection vector */
+        const double *bA = t->data + A->bv, *bB = t->data + B->bv;
+        for (i = 0, ci = 0; i < nA; i++)
+            if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
+        for (i = 0; i < nB; i++)
+            if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
+        if (joint_coefficients(L, n, S, d, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
+    }
     /* What the outer rows keep right of the c pivots is Lambda_C, compressed
      * to lower-trapezoidal form (at most 6nh columns). */
     rank = ncol - c < orows ? ncol - c : orows;
@@ -333,12 +611,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
             for (r = 0; r < orows; r++)
                 for (j = 0; j < 6; j++) R[(int64_t)r * w + j] = 0.0;
         } else {
-            double Lc[36], Wc[36], WcT[36];
-            if (dense_cholesky6(IC, Lc) != 0) return -1;
-            dense_cholesky6_lower_solve(Lc, id6, Wc, 6);
-            for (i = 0; i < 6; i++)
-                for (j = 0; j < 6; j++) WcT[6 * i + j] = Wc[6 * j + i];
-            for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], WcT, R + (int64_t)6 * ci * w, w);
+            double Y[36];
+            if (mp_inverse_factor(IC, Y) != 0) return -1;
+            for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], Y, R + (int64_t)6 * ci * w, w);
         }
         for (r = 0; r < orows; r++)
             for (j = 0; j < rank; j++) R[(int64_t)r * w + 6 + j] = LC[(int64_t)r * orows + j];
@@ -359,45 +634,6 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d)
     return 0;
 }
 
-/* y = C^{-1} m for the lower-triangular 6x6 factor C (forward substitution). */
-static void lower_solve_row6(const double *Cf, const double *m, double *y)
-{
-    int i, k;
-    for (i = 0; i < 6; i++) {
-        double v = m[i];
-        for (k = 0; k < i; k++) v -= Cf[6 * i + k] * y[k];
-        y[i] = v / Cf[7 * i];
-    }
-}
-
-/* Index among a child's handles of the outer handle at position c of the
- * merged list [A-outer; B-outer]. */
-static int32_t child_index(int32_t c, int32_t k)
-{
-    return c < k ? c : c + 1;
-}
-
-/* T = Phi^A_kk + Phi^B_kk is positive definite in exact arithmetic, but at
- * extreme mass ratios rounding can leave it indefinite by a hair (MATH.md
- * §3.8: plain Cholesky failed on 1e12 ratios). Retry with a diagonal shift
- * at the rounding level of T (1e-13, then 1e-11, 1e-9 of its largest
- * diagonal entry): the perturbation is below what the data resolve, while
- * an LU inverse of an indefinite T yields a negative S^T V S and garbage. */
-static int guarded_cholesky(const double *T, double *C)
-{
-    double shifted[36], scale = 0.0, shift;
-    int i, k;
-    if (dense_cholesky6(T, C) == 0) return 0;
-    for (i = 0; i < 6; i++)
-        if (fabs(T[7 * i]) > scale) scale = fabs(T[7 * i]);
-    for (k = 0, shift = 1e-13 * scale; k < 3; k++, shift *= 100.0) {
-        memcpy(shifted, T, sizeof shifted);
-        for (i = 0; i < 6; i++) shifted[7 * i] += shift;
-        if (dense_cholesky6(shifted, C) == 0) return 0;
-    }
-    return -1;
-}
-
 int dca_node_update(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
@@ -406,178 +642,39 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
     const pose *J = t->poses + C->J;
-    double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
-    double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
-    double *M = t->mscratch, *bC = t->data + C->bv;
-    const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
+    double *S = t->data + C->S;
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
-    int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
-    int32_t nAo = nA - 1, i, j, ci;
-    double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
+    double beta[6], bk[6];
+    int32_t i;
 
     /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
-
-    /* T = X Phi^A_kk X^T + Phi^B_kk, with A's k blocks moved into the child
-     * frame of k (§3.6); V = T^{-1} is used only through T's Cholesky
-     * factor C: V = C^{-T} C^{-1}. */
-    spatial_xform_congruence(J, cblk(phiA, nA, ka, ka), T);
-    {
-        const double *Bkk = cblk(phiB, nB, kb, kb);
-        for (i = 0; i < 36; i++) T[i] += Bkk[i]; /* both exactly symmetric: so is T */
-    }
-    if (guarded_cholesky(T, Cf) != 0) return -1;
-
-    /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
-    for (ci = 0; ci < nAo; ci++) spatial_xform_rows(J, cblk(phiA, nA, child_index(ci, ka), ka), M + 36 * ci);
-    for (ci = nAo; ci < nh; ci++) {
-        const double *src = cblk(phiB, nB, child_index(ci - nAo, kb), kb);
-        for (i = 0; i < 36; i++) M[36 * ci + i] = -src[i];
-    }
-
-    spatial_xform_motion(J, bA + 6 * ka, bk); /* b^A_k in the child frame */
-    for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * kb + i];
-    dense_cholesky6_lower_solve(Cf, beta, tmp, 1);
-    dense_cholesky6_upper_solve(Cf, tmp, Vb, 1); /* V beta */
-
-    if (d == 6) {
-        /* Free joint: S = I, so U = I, W = 0, gamma = Q, rho = T Q - beta. */
-        memset(U, 0, 36 * sizeof(double));
-        for (i = 0; i < 6; i++) U[7 * i] = 1.0;
-        dense_matvec6(T, Q, rho);
-        for (i = 0; i < 6; i++) {
-            rho[i] -= beta[i];
-            gamma[i] = Q[i];
-        }
-    } else {
-        /* C^{-1} S, V S = C^{-T} C^{-1} S, and D = S^T V S formed as the Gram
-         * matrix of C^{-1} S: it cannot lose definiteness to rounding. */
-        dense_cholesky6_lower_solve(Cf, S, Ws, d);
-        dense_cholesky6_upper_solve(Cf, Ws, VS, d);
-        if (d == 1) {
-            double Dv = 0.0, sb = 0.0;
-            for (i = 0; i < 6; i++) Dv += Ws[i] * Ws[i];
-            if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
-            Dinv[0] = 1.0 / Dv;
-            for (i = 0; i < 6; i++) {
-                U[i] = VS[i] * Dinv[0];
-                sb += VS[i] * beta[i];
-            }
-            rho[0] = (Q[0] - sb) * Dinv[0];
-            for (i = 0; i < 6; i++) gamma[i] = Vb[i] + VS[i] * rho[0];
-        } else {
-            dense_mul_tn(Ws, Ws, D, d, 6, d);
-            dense_symmetrize(D, d);
-            if (dense_spd_inverse(D, Dinv, d) != 0) return -1;
-            dense_mul_nt(Dinv, VS, U, d, d, 6); /* U = D^{-1} (V S)^T */
-            dense_tmatvec(VS, beta, tmp, 6, d); /* rho = D^{-1} (Q - S^T V beta) */
-            for (i = 0; i < d; i++) tmp[i] = Q[i] - tmp[i];
-            dense_matvec(Dinv, tmp, rho, d, d);
-            /* gamma = W beta + U^T Q = V beta + V S rho, since W = V - V S U */
-            dense_matvec(VS, rho, gamma, 6, d);
-            for (i = 0; i < 6; i++) gamma[i] += Vb[i];
-        }
-    }
-
-    /* Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T with
-     * M W M^T = (M C^{-T})(M C^{-T})^T - (M V S) D^{-1} (M V S)^T;
-     * b_C = [b^A_o; b^B_o] - M gamma. A free joint has W = 0. */
-    {
-        double *Y = t->scratch, *Z = t->scratch + 36 * nh, *ZD = Z + 6 * nh * 6;
-        if (d < 6) {
-            for (ci = 0; ci < 6 * nh; ci++) lower_solve_row6(Cf, M + 6 * ci, Y + 6 * ci);
-            if (d == 1) {
-                for (ci = 0; ci < 6 * nh; ci++) {
-                    double z = 0.0;
-                    for (j = 0; j < 6; j++) z += M[6 * ci + j] * VS[j];
-                    Z[ci] = z;
-                    ZD[ci] = z * Dinv[0];
-                }
-            } else {
-                dense_mul(M, VS, Z, 6 * nh, 6, d);   /* Z = M V S */
-                dense_mul(Z, Dinv, ZD, 6 * nh, d, d); /* Z D^{-1} */
-            }
-        }
-        if (hybrid_phi(L, n, S, d) != 0) return -1;
-        for (ci = 0; ci < nh; ci++) {
-            const double *src = ci < nAo ? bA + 6 * child_index(ci, ka) : bB + 6 * child_index(ci - nAo, kb);
-            dense_matvec6(M + 36 * ci, gamma, tmp);
-            for (i = 0; i < 6; i++) bC[6 * ci + i] = src[i] - tmp[i];
-        }
-    }
-    return 0;
+    spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
+    for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
+    return hybrid_phi(L, n, S, C->d, beta, Q);
 }
 
-/* M W g = M V g - M V S (U g) = Y (C^{-1} g) - ZD (V S)^T g, from the
- * products dca_node_update left in the scratch: Y = M C^{-T} (6nh x 6) and
- * ZD = M V S D^{-1} (6nh x d). */
+/* M W g = (W M^T)^T g = FX^T g. */
 void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out)
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const double *Y = t->scratch, *ZD = t->scratch + 72 * C->nh, *VS = t->data + C->VS;
-    const int32_t rows = 6 * C->nh, d = C->d;
-    double u[6], v[6];
-    int32_t i, k;
-    if (d == 6) {
-        for (i = 0; i < rows; i++) out[i] = 0.0;
-        return;
-    }
-    lower_solve_row6(t->data + C->W, g, u);
-    for (k = 0; k < d; k++) {
-        double s = 0.0;
-        for (i = 0; i < 6; i++) s += VS[i * d + k] * g[i];
-        v[k] = s;
-    }
-    if (d == 1) { /* revolute, prismatic: ZD is a column */
-        for (i = 0; i < rows; i++) {
-            const double *y = Y + 6 * i;
-            out[i] = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5] -
-                     ZD[i] * v[0];
-        }
-        return;
-    }
-    for (i = 0; i < rows; i++) {
-        const double *y = Y + 6 * i, *zd = ZD + (int64_t)i * d;
-        double s = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5];
-        for (k = 0; k < d; k++) s -= zd[k] * v[k];
-        out[i] = s;
-    }
+    const double *FX = t->data + C->W;
+    const int32_t rows = 6 * C->nh;
+    int32_t i;
+    for (i = 0; i < rows; i++)
+        out[i] = FX[i] * g[0] + FX[rows + i] * g[1] + FX[2 * rows + i] * g[2] + FX[3 * rows + i] * g[3] +
+                 FX[4 * rows + i] * g[4] + FX[5 * rows + i] * g[5];
 }
 
-/* (U M^T)_{r,i} = (M V S D^{-1})_{i,r} = ZD_{i,r} (U = D^{-1} (V S)^T, D
- * symmetric); a free joint has U = I: M's column r. */
+/* Row r of U M^T = QX. */
 void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const int32_t rows = 6 * C->nh, d = C->d;
-    int32_t i;
-    if (d == 6) {
-        for (i = 0; i < rows; i++) out[i] = t->mscratch[6 * i + r];
-        return;
-    }
-    for (i = 0; i < rows; i++) out[i] = t->scratch[72 * C->nh + (int64_t)i * d + r];
-}
-
-void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
-{
-    const tree *t = &L->t;
-    const node *C = &t->nodes[n];
-    const double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
-    double tmp[6], uh[6];
-    int i;
-    if (C->d == 6) {
-        for (i = 0; i < 6; i++) out[i] = 0.0;
-        return;
-    }
-    /* W h = V h - V S (U h) */
-    dense_cholesky6_lower_solve(Cf, h, tmp, 1);
-    dense_cholesky6_upper_solve(Cf, tmp, out, 1);
-    dense_matvec(U, h, uh, C->d, 6);
-    dense_matvec(VS, uh, tmp, 6, C->d);
-    for (i = 0; i < 6; i++) out[i] -= tmp[i];
+    const int32_t rows = 6 * C->nh;
+    memcpy(out, t->data + C->U + (int64_t)r * rows, sizeof(double) * (size_t)rows);
 }
 
 void dca_node_backsub(aqs_linkage *L, int32_t n)
@@ -586,35 +683,27 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     const node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *x = t->data + C->xf;
-    const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
-    const double *U = t->data + C->U;
+    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
     const pose *J = (t->poses + C->J);
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *xA = t->data + A->xf, *xB = t->data + B->xf;
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
-    int32_t nA = A->nh, nB = B->nh, i, ci, d = C->d;
-    double h[6], tmp[6];
+    int32_t nA = A->nh, nB = B->nh, i, k, ci, d = C->d, rows = 6 * C->nh;
+    double tmp[6];
 
-    /* h = Phi^A_ko x_A - Phi^B_ko x_B (eq. 4, 5), from the children's blocks:
-     * = X sum_i (Phi^A_{i,k})^T x_i - sum_j (Phi^B_{j,k})^T x_j. */
-    {
-        double ha[6] = {0, 0, 0, 0, 0, 0};
-        int32_t nAo = nA - 1;
-        for (ci = 0; ci < nAo; ci++) {
-            dense_tmatvec6(cblk(phiA, nA, child_index(ci, C->ka), C->ka), x + 6 * ci, tmp);
-            for (i = 0; i < 6; i++) ha[i] += tmp[i];
-        }
-        spatial_xform_motion(J, ha, h);
-        for (ci = nAo; ci < C->nh; ci++) {
-            dense_tmatvec6(cblk(phiB, nB, child_index(ci - nAo, C->kb), C->kb), x + 6 * ci, tmp);
-            for (i = 0; i < 6; i++) h[i] -= tmp[i];
-        }
+    /* qdd = rho - QX x, f = gamma + FX x (x: C's handle forces) */
+    for (i = 0; i < d; i++) {
+        const double *qr = QX + (int64_t)i * rows;
+        double s = rho[i];
+        for (k = 0; k < rows; k++) s -= qr[k] * x[k];
+        qdd[i] = s;
     }
-    dense_matvec(U, h, tmp, d, 6);
-    for (i = 0; i < d; i++) qdd[i] = rho[i] - tmp[i];
-    dca_apply_W(L, n, h, f);
-    for (i = 0; i < 6; i++) f[i] += gamma[i];
+    for (i = 0; i < 6; i++) {
+        const double *fr = FX + (int64_t)i * rows;
+        double s = gamma[i];
+        for (k = 0; k < rows; k++) s += fr[k] * x[k];
+        f[i] = s;
+    }
 
     for (i = 0, ci = 0; i < nA; i++) {
         if (i == C->ka) continue;

@@ -33,8 +33,9 @@ typedef struct {
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
     int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
-    int64_t W;            /* Cholesky factor C of T = V^{-1} (6x6 lower); W = V - V S U */
-    int64_t U, VS, rho, gamma, S; /* §3.4: U (d x 6), V S (6 x d), rho (d), gamma (6), S (6 x d) */
+    int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
+    int64_t U, VS, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; VS unused; rho (d),
+                                     gamma (6), S (6 x d); x: the node's handle forces */
     int64_t ic;           /* composite spatial inertia of the subassembly (6x6, node frame) */
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
                              + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
