@@ -450,7 +450,8 @@ aqs_status assembly_build(aqs_linkage *L)
     /* dca_node_update: Y (6nh x 6) + Z and Z D^-1 (6nh x d, d <= 6 each) = 108 nh doubles */
     t->scratch = lk_calloc(L, 108 * (size_t)(t->max_handles + 2), sizeof(double));
     t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
-    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6),
+    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6) +
+                                (size_t)t->max_handles * (sizeof(pose) / sizeof(double) + 1),
                             sizeof(double));
     t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));

@@ -502,7 +502,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
     double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = M + (int64_t)(orows + c) * ncol;
     double IB[13], Lm[36], ZA[36], ZB[36], Tc[36];
-    pose Pk, Pkb;
+    pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
 
     pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
@@ -515,41 +515,78 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         memcpy(IC, IA, 13 * sizeof(double));
         mp_add(IC, IB[0], IB + 1, IB + 4);
     }
-    /* The relative rigid mode, in square-root form: [Y_A Y_B] (I_A^-1 = Y_A Y_A^T,
-     * I_B^-1 = Y_B Y_B^T; zero for the world) reflected from the right into
-     * [Lm 0], Lm Lm^T = I_A^-1 + I_B^-1, with H = [H1a; H1b] the first six
-     * columns of the reflection: Z_A = I_A^-1 Lm^-T = Y_A H1a and Z_B =
-     * -I_B^-1 Lm^-T = -Y_B H1b, no inverse formed or summed. */
+    /* The relative rigid mode, in square-root form, in the frame F at the
+     * centre of mass of the side with the larger mobility (C's axes): there
+     * that side's I^-1 = Y Y^T is block diagonal, so its large rotational
+     * mobility (a near point mass, a light part) stays out of the
+     * translational rows. [Y_A Y_B] is reflected from the right into
+     * [Lm 0], Lm Lm^T = I_A^-1 + I_B^-1 (nothing summed or inverted), and
+     * Z_A = I_A^-1 Lm^-T = Y_A (Lm^-1 Y_A)^T, Z_B = -Y_B (Lm^-1 Y_B)^T by
+     * forward substitution. */
     {
-        double Yr[18 * 12], vr[12], YA[36], YB[36];
+        double Yr[6 * 12], vr[12], YA[36], YB[36], mA[13], mB[13], cF[3] = {0, 0, 0}, wa = -1.0, wb = -1.0;
+        memcpy(mA, IA, sizeof mA);
+        memcpy(mB, IB, sizeof mB);
+        if (!A->grounded) {
+            if (mp_inverse_factor(mA, YA) != 0) return -1;
+            for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
+        }
+        if (!B->grounded) {
+            if (mp_inverse_factor(mB, YB) != 0) return -1;
+            for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
+        }
+        memcpy(cF, (wa >= wb ? mA : mB) + 1, sizeof cF);
+        for (i = 0; i < 3; i++) {
+            mA[1 + i] -= cF[i];
+            mB[1 + i] -= cF[i];
+        }
         if (A->grounded) memset(YA, 0, sizeof YA);
-        else if (mp_inverse_factor(IA, YA) != 0) return -1;
+        else mp_inverse_factor(mA, YA);
         if (B->grounded) memset(YB, 0, sizeof YB);
-        else if (mp_inverse_factor(IB, YB) != 0) return -1;
+        else mp_inverse_factor(mB, YB);
+        for (ci = 0; ci < nh; ci++) { /* the handles and k's child frame, seen from F */
+            PF[ci] = P[ci];
+            for (i = 0; i < 3; i++) PF[ci].p[i] -= cF[i];
+        }
+        PkbF = Pkb;
+        for (i = 0; i < 3; i++) PkbF.p[i] -= cF[i];
         memset(Yr, 0, sizeof Yr);
         for (i = 0; i < 6; i++)
             for (j = 0; j < 6; j++) {
                 Yr[12 * i + j] = YA[6 * i + j];
                 Yr[12 * i + 6 + j] = YB[6 * i + j];
             }
-        for (i = 0; i < 12; i++) Yr[12 * (6 + i) + i] = 1.0;
-        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 18, i, i, 12, vr);
+        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 6, i, i, 12, vr);
         for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) {
-                double sa = 0.0, sb = 0.0;
-                Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
-                for (r = 0; r < 6; r++) {
-                    sa += YA[6 * i + r] * Yr[12 * (6 + r) + j];
-                    sb += YB[6 * i + r] * Yr[12 * (12 + r) + j];
-                }
-                ZA[6 * i + j] = sa;
-                ZB[6 * i + j] = -sb;
-            }
+            for (j = 0; j < 6; j++) Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+        {
+            double Wa[36], Wb[36];
+            for (j = 0; j < 6; j++)
+                for (i = 0; i < 6; i++) {
+                    double xa = YA[6 * i + j], xb = YB[6 * i + j];
+                    for (r = 0; r < i; r++) {
+                        xa -= Lm[6 * i + r] * Wa[6 * r + j];
+                        xb -= Lm[6 * i + r] * Wb[6 * r + j];
+                    }
+                    Wa[6 * i + j] = xa / Lm[7 * i];
+                    Wb[6 * i + j] = xb / Lm[7 * i];
+                }
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < 6; j++) {
+                    double sa = 0.0, sb = 0.0;
+                    for (r = 0; r < 6; r++) {
+                        sa += YA[6 * i + r] * Wa[6 * j + r];
+                        sb += YB[6 * i + r] * Wb[6 * j + r];
+                    }
+                    ZA[6 * i + j] = sa;
+                    ZB[6 * i + j] = -sb;
+                }
+        }
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
-    for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
     for (i = 0, ci = 0; i < nA; i++) {
         if (i == C->ka) continue;
         for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6, LA + (int64_t)(6 * i + r) * ldA,
@@ -563,7 +600,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         ci++;
     }
     /* The relative acceleration across k (B's minus A's), in k's child frame. */
-    xform_cols(&Pkb, Lm, rel, ncol);
+    xform_cols(&PkbF, Lm, rel, ncol);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
     for (j = 0; j < rA; j++) {
