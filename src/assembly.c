@@ -357,10 +357,9 @@ static void layout(tree *t)
         node *n = &t->nodes[i];
         int64_t h = n->nh;
         n->poses = pool_take(&t->nposes, h);
-        n->phi = pool_take(&t->ndata, 36 * h * h);
         n->bv = pool_take(&t->ndata, 6 * h);
         n->xf = pool_take(&t->ndata, 6 * h);
-        n->ic = pool_take(&t->ndata, 36);
+        n->ic = pool_take(&t->ndata, 13);
         n->lam = pool_take(&t->ndata, 36 * h * h);
         if (n->joint >= 0) {
             n->J = pool_take(&t->nposes, 1);

@@ -11,35 +11,10 @@
 #include "model.h"
 #include "update.h"
 
-/* Phi is stored block-major: the 6x6 block (i, j) of an nh-handle node is
- * contiguous at 36 (nh i + j), row-major inside. */
-static double *blk(double *phi, int32_t nh, int32_t i, int32_t j)
-{
-    return phi + 36 * ((int64_t)nh * i + j);
-}
-
 static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp);
 static int mp_inverse_factor(const double *mp, double *Y);
 static int mp_inverse(const double *mp, double *Iinv);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
-
-static void transpose6(const double *A, double *T)
-{
-    int i, j;
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) T[6 * j + i] = A[6 * i + j];
-}
-
-/* Make block (j, i) the transpose of block (i, j) for i < j, and (when
- * diagonal is set) the diagonal blocks symmetric. */
-static void symmetrize_blocks(double *phi, int32_t nh, int diagonal)
-{
-    int32_t i, j;
-    for (i = 0; i < nh; i++) {
-        if (diagonal) dense_symmetrize(blk(phi, nh, i, i), 6);
-        for (j = i + 1; j < nh; j++) transpose6(blk(phi, nh, i, j), blk(phi, nh, j, i));
-    }
-}
 
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
@@ -51,7 +26,10 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
                        (long long)t->ndata);
     for (n = 0; n < t->nnodes; n++)
-        if (t->nodes[n].joint < 0) dca_leaf_phi(L, n);
+        if (t->nodes[n].joint < 0) {
+            if (L->dca_form == AQS_DCA_FORM_PHI) dca_phi_leaf(L, n);
+            else dca_leaf_phi(L, n);
+        }
     /* every b and internal node from scratch, loads and gravity included */
     t->all_dirty = 1;
     L->loads_dirty = L->gravity_dirty = 1;
@@ -62,41 +40,10 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     node *nd = &t->nodes[n];
-    double *phi = t->data + nd->phi;
-    const pose *P = t->poses + nd->poses;
-    int32_t i, j;
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
     nd->grounded = nd->comp == L->m.ncomp;
-    if (nd->grounded) {
-        memset(phi, 0, sizeof(double) * 36 * nd->nh * nd->nh); /* the world does not move */
-        memset(t->data + nd->ic, 0, 36 * sizeof(double));
-        return;
-    }
-    mp_of_comp(L, nd->comp, t->data + nd->ic);
-    {
-        /* Phi_{hh'} = X_h I^{-1} X_h'^T = (X_h Y)(X_h' Y)^T, I^-1 = Y Y^T */
-        double Y[36], *F = t->scratch; /* nh blocks X_h Y */
-        if (mp_inverse_factor(t->data + nd->ic, Y) != 0) {
-            /* not positive definite: finalize's check let it through; keep
-             * the old inverse (the solve reports the singularity) */
-            const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
-            double X[36];
-            for (i = 0; i < nd->nh; i++) {
-                spatial_from_parent(&P[i], X);
-                dense_mul66(X, Iinv, F + 36 * i);
-            }
-            for (j = 0; j < nd->nh; j++) {
-                spatial_from_parent(&P[j], X);
-                for (i = 0; i <= j; i++) dense_mul66_nt(F + 36 * i, X, blk(phi, nd->nh, i, j));
-            }
-            symmetrize_blocks(phi, nd->nh, 1);
-            return;
-        }
-        for (i = 0; i < nd->nh; i++) xform_cols(&P[i], Y, F + 36 * i, 6);
-        for (j = 0; j < nd->nh; j++)
-            for (i = 0; i <= j; i++) dense_mul66_nt(F + 36 * i, F + 36 * j, blk(phi, nd->nh, i, j));
-        symmetrize_blocks(phi, nd->nh, 1);
-    }
+    if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
+    else mp_of_comp(L, nd->comp, t->data + nd->ic);
 }
 
 void dca_leaf_b(aqs_linkage *L, int32_t n)
@@ -115,7 +62,8 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         acc[5] = -L->gravity[2];
     } else {
         double Iinv[36];
-        if (mp_inverse(t->data + nd->ic, Iinv) != 0) memcpy(Iinv, L->m.comp_inverse + 36 * nd->comp, sizeof Iinv);
+        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse(t->data + nd->ic, Iinv) != 0)
+            memcpy(Iinv, L->m.comp_inverse + 36 * nd->comp, sizeof Iinv);
         dense_matvec(Iinv, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
     }
     for (i = 0; i < nd->nh; i++) {
@@ -310,6 +258,30 @@ static void complement(const double *S, int32_t d, double *Tc)
 {
     double Q[36], v[6];
     int32_t nq = 0, i, j, k, pass;
+    if (d == 1 && ((S[0] == 0.0 && S[1] == 0.0 && S[2] == 0.0) || (S[3] == 0.0 && S[4] == 0.0 && S[5] == 0.0))) {
+        /* A revolute or prismatic axis a (unit): in its half, two unit vectors
+         * orthogonal to a (Duff et al.'s branchless basis), and the other
+         * half's three axes. */
+        const int32_t h = S[0] == 0.0 && S[1] == 0.0 && S[2] == 0.0 ? 3 : 0, o = 3 - h;
+        double a[3], nrm, sg, aa, bb;
+        nrm = sqrt(S[h] * S[h] + S[h + 1] * S[h + 1] + S[h + 2] * S[h + 2]);
+        if (nrm > 0.0) {
+            for (i = 0; i < 3; i++) a[i] = S[h + i] / nrm;
+            sg = a[2] >= 0.0 ? 1.0 : -1.0;
+            aa = -1.0 / (sg + a[2]);
+            bb = a[0] * a[1] * aa;
+            memset(Tc, 0, 36 * sizeof(double));
+            /* columns 0, 1: b1 = (1 + sg a0^2 aa, sg bb, -sg a0), b2 = (bb, sg + a1^2 aa, -a1) */
+            Tc[6 * (h + 0) + 0] = 1.0 + sg * a[0] * a[0] * aa;
+            Tc[6 * (h + 1) + 0] = sg * bb;
+            Tc[6 * (h + 2) + 0] = -sg * a[0];
+            Tc[6 * (h + 0) + 1] = bb;
+            Tc[6 * (h + 1) + 1] = sg + a[1] * a[1] * aa;
+            Tc[6 * (h + 2) + 1] = -a[1];
+            for (i = 0; i < 3; i++) Tc[6 * (o + i) + 2 + i] = 1.0;
+            return;
+        }
+    }
     for (j = 0; j < d + 6 && nq < 6; j++) {
         double best = -1.0, nv;
         if (j < d) {
@@ -374,18 +346,17 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
  * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
  * products of reduced factors only, no large mobility subtracted from
  * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b. */
-static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *X,
-                              const double *Lc, const double *K, int32_t ncol, const double beta[6],
-                              const double *Q, const double *bo)
+static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *Tc,
+                              const double *X, const double *Lc, const double *K, int32_t ncol,
+                              const double beta[6], const double *Q, const double *bo)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
     double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *bC = t->data + C->bv;
     const int32_t c = 6 - d, orows = 6 * C->nh;
-    double E[36], U[36], Tc[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
+    double E[36], U[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
     int32_t i, j, k, r, o;
-    complement(S, d, Tc);
     /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
     for (j = 0; j < 6; j++)
         for (i = 0; i < c; i++) {
@@ -496,7 +467,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     const pose *J = t->poses + C->J;
     const double *IA = t->data + A->ic, *IBb = t->data + B->ic;
     const double *LA = t->data + A->lam, *LB = t->data + B->lam;
-    double *IC = t->data + C->ic, *LC = t->data + C->lam, *phi = t->data + C->phi;
+    double *IC = t->data + C->ic, *LC = t->data + C->lam;
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
@@ -629,45 +600,22 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, S, d, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
+        if (joint_coefficients(L, n, S, d, Tc, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
     }
     /* What the outer rows keep right of the c pivots is Lambda_C, compressed
      * to lower-trapezoidal form (at most 6nh columns). */
-    rank = ncol - c < orows ? ncol - c : orows;
-    for (i = 0; i < rank && i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+    /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
+     * internal dofs), else compressed to lower-trapezoidal form by reflections. */
+    rank = ncol - c;
+    if (rank > orows) {
+        for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+        rank = orows;
+    }
     for (r = 0; r < orows; r++) {
-        for (j = 0; j < rank; j++) LC[(int64_t)r * orows + j] = M[(int64_t)r * ncol + c + j];
+        memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
+        for (j = rank; j < orows; j++) LC[(int64_t)r * orows + j] = 0.0;
     }
     C->rank = rank;
-    /* Phi_C = G I_C^-1 G^T + Lambda_C Lambda_C^T as one Gram matrix of the
-     * rows [G Lc^-T, Lambda_C] (I_C = Lc Lc^T). */
-    {
-        const int32_t w = 6 + rank;
-        double *R = M; /* orows x w */
-        if (C->grounded) {
-            for (r = 0; r < orows; r++)
-                for (j = 0; j < 6; j++) R[(int64_t)r * w + j] = 0.0;
-        } else {
-            double Y[36];
-            if (mp_inverse_factor(IC, Y) != 0) return -1;
-            for (ci = 0; ci < nh; ci++) xform_cols(&P[ci], Y, R + (int64_t)6 * ci * w, w);
-        }
-        for (r = 0; r < orows; r++)
-            for (j = 0; j < rank; j++) R[(int64_t)r * w + 6 + j] = LC[(int64_t)r * orows + j];
-        for (ci = 0; ci < nh; ci++)
-            for (i = ci; i < nh; i++) {
-                double *out = blk(phi, nh, ci, i);
-                int32_t a, b2;
-                for (a = 0; a < 6; a++)
-                    for (b2 = 0; b2 < 6; b2++) {
-                        const double *x = R + (int64_t)(6 * ci + a) * w, *y = R + (int64_t)(6 * i + b2) * w;
-                        double s = 0.0;
-                        for (j = 0; j < w; j++) s += x[j] * y[j];
-                        out[6 * a + b2] = s;
-                    }
-            }
-        symmetrize_blocks(phi, nh, 0);
-    }
     return 0;
 }
 
@@ -684,6 +632,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     double beta[6], bk[6];
     int32_t i;
 
+    if (L->dca_form == AQS_DCA_FORM_PHI) return dca_phi_node_update(L, n);
     /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);

@@ -31,12 +31,13 @@ typedef struct {
     int32_t d;            /* dofs of the principal joint */
     int64_t handles;      /* nh effective joint indices, in tree.handles */
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
-    int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
+    int64_t bv, xf;       /* b (6nh), handle forces x (6nh), in tree.data */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
     int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
     int64_t U, VS, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; VS unused; rho (d),
                                      gamma (6), S (6 x d); x: the node's handle forces */
-    int64_t ic;           /* composite spatial inertia of the subassembly (6x6, node frame) */
+    int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
+                             about it (13 doubles, node frame; zero when grounded) */
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
                              + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
@@ -194,6 +195,7 @@ struct aqs_linkage {
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
+    int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
