@@ -62,6 +62,7 @@ typedef struct bench_options {
     double first_move;
     double fallback; /* aqs_linkage_set_exact_fallback on the adaptive linkage (0: off) */
     double prediction; /* aqs_linkage_set_prediction on the adaptive linkage (0: off) */
+    int32_t dca_form;  /* aqs_linkage_set_dca_form on both linkages */
     const char *out, *tip_path, *export_urdf;
     int append, quiet;
 } bench_options;
@@ -128,6 +129,8 @@ static void usage(FILE *f)
             "                     (rad or m) in the first step (default 1e-3)\n"
             "  --prediction M     aqs_linkage_set_prediction(M) on the adaptive linkage\n"
             "                     (default AQS_PREDICTION_MARGIN = 1024; 0: off)\n"
+            "  --dca-form NAME    sqrt | phi: aqs_linkage_set_dca_form on both linkages\n"
+            "                     (default sqrt, the library's)\n"
             "  --fallback F       aqs_linkage_set_exact_fallback(F) on the adaptive linkage:\n"
             "                     exact steps after one that computed more than F of the\n"
             "                     joints (default 0: off)\n"
@@ -278,7 +281,7 @@ static int parse_list(const char *opt, const char *s, bench_options *o,
 }
 
 enum { OPT_SCENE, OPT_JOINTS, OPT_FORCES, OPT_METRIC, OPT_EPS, OPT_STEPS, OPT_REPEATS,
-       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_PREDICTION, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
+       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_PREDICTION, OPT_DCA_FORM, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
        OPT_TIP_EVERY, OPT_QUIET, OPT_EXPORT_URDF, OPT_HELP };
 
 static const struct {
@@ -291,6 +294,7 @@ static const struct {
     {"--repeats", OPT_REPEATS, 1},   {"--seed", OPT_SEED, 1},
     {"--first-move", OPT_FIRST_MOVE, 1}, {"--exact-every", OPT_EXACT_EVERY, 1},
     {"--fallback", OPT_FALLBACK, 1}, {"--prediction", OPT_PREDICTION, 1},
+    {"--dca-form", OPT_DCA_FORM, 1},
     {"--out", OPT_OUT, 1},           {"--append", OPT_APPEND, 0},
     {"--tip-path", OPT_TIP_PATH, 1}, {"--tip-every", OPT_TIP_EVERY, 1},
     {"--quiet", OPT_QUIET, 0},       {"--help", OPT_HELP, 0},
@@ -395,6 +399,14 @@ static int parse_options(int argc, char **argv, bench_options *o)
             break;
         case OPT_FALLBACK:
             if (parse_double_where("--fallback", val, &o->fallback, unit_interval, "in [0, 1]") != 0) {
+                return 1;
+            }
+            break;
+        case OPT_DCA_FORM:
+            if (strcmp(val, "sqrt") == 0) o->dca_form = AQS_DCA_FORM_SQRT;
+            else if (strcmp(val, "phi") == 0) o->dca_form = AQS_DCA_FORM_PHI;
+            else {
+                fprintf(stderr, "aqs-bench: --dca-form: '%s' is not sqrt or phi\n", val);
                 return 1;
             }
             break;
@@ -809,12 +821,13 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
             "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
-            "\"ratio_R_aba\":%.9g}\n",
+            "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\"}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
-            o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba);
+            o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba,
+            o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt");
     fflush(b->json);
 }
 
@@ -850,7 +863,8 @@ static int setup(bench_state *b)
     double t0;
     int32_t i, max_forces = 0;
     rss0 = bench_current_rss_bytes();
-    if (failed(aqs_linkage_create(&b->exact), NULL, "aqs_linkage_create")) {
+    if (failed(aqs_linkage_create(&b->exact), NULL, "aqs_linkage_create") ||
+        failed(aqs_linkage_set_dca_form(b->exact, o->dca_form), b->exact, "aqs_linkage_set_dca_form")) {
         return 1;
     }
     t0 = bench_now();
@@ -903,6 +917,7 @@ static int setup(bench_state *b)
     b->exact_bytes = bench_current_rss_bytes() - rss0;
     rss0 = bench_current_rss_bytes();
     if (failed(aqs_linkage_create(&b->adapt), NULL, "aqs_linkage_create") ||
+        failed(aqs_linkage_set_dca_form(b->adapt, o->dca_form), b->adapt, "aqs_linkage_set_dca_form") ||
         failed(bench_build_scene(b->adapt, kind, o->size), b->adapt, "building the scene") ||
         failed(aqs_linkage_finalize(b->adapt), b->adapt, "aqs_linkage_finalize") ||
         failed(aqs_linkage_set_tolerance(b->adapt, o->metric, ldexp(1.0, -19)), b->adapt,

@@ -306,6 +306,28 @@ AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *linkage, int32_t so
 /** The current AQS_EXACT_* choice into *solver. Returns AQS_OK, AQS_EINVAL (NULL). */
 AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *linkage, int32_t *solver);
 
+/** How the divide-and-conquer solver (the exact DCA and every adaptive
+ *  solve) keeps a subassembly's articulated inverse inertia Phi.
+ *  AQS_DCA_FORM_SQRT (default): Phi = G I^-1 G^T + Lambda Lambda^T, the
+ *  composite inertia I kept as mass, centre of mass and rotational inertia
+ *  and the mobility of the internal joints as a square-root factor Lambda,
+ *  joined by Householder reflections (docs/math.md, "Accurate Phi"): no
+ *  mobility is subtracted from another, so long straight chains (10^5 links
+ *  and more), near point masses, light parts and large mass ratios keep
+ *  their digits. AQS_DCA_FORM_PHI: Phi as an explicit matrix, joined by
+ *  Phi_C = Phi_oo - M W M^T (the form of aqs before 0.1.1): 2.5-3.5x fewer
+ *  instructions per tree node, but the subtraction loses digits as the
+ *  subassemblies grow (a straight chain of 13,000 links fails with
+ *  AQS_ENUMERIC) and with small or badly scaled inertias (docs/api.md,
+ *  "Accuracy"). Only while building (before aqs_linkage_finalize).
+ *  Returns AQS_OK, AQS_EINVAL (not an AQS_DCA_FORM_* value, message
+ *  naming form), AQS_ESTATE (finalized). */
+#define AQS_DCA_FORM_SQRT 0
+#define AQS_DCA_FORM_PHI 1
+AQS_API aqs_status aqs_linkage_set_dca_form(aqs_linkage *linkage, int32_t form);
+/** The current AQS_DCA_FORM_* choice into *form. Returns AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_dca_form(const aqs_linkage *linkage, int32_t *form);
+
 /* ------------------------------------------------------------------------
  * Error-bounded adaptive solving (Redon & Lin; MATH.md §4-6)
  * ---------------------------------------------------------------------- */

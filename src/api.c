@@ -235,6 +235,28 @@ AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *L, int32_t *s
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_set_dca_form(aqs_linkage *L, int32_t form)
+{
+    static const char fn[] = "aqs_linkage_set_dca_form";
+    aqs_status st;
+    CHECK_LINKAGE(L);
+    if ((st = need_building(L, fn)) != AQS_OK) return st;
+    if (form != AQS_DCA_FORM_SQRT && form != AQS_DCA_FORM_PHI)
+        return lk_fail(L, AQS_EINVAL, "%s: form = %d is not an AQS_DCA_FORM_* value", fn, (int)form);
+    L->dca_form = form;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_dca_form(const aqs_linkage *L, int32_t *form)
+{
+    static const char fn[] = "aqs_linkage_get_dca_form";
+    aqs_linkage *ml = (aqs_linkage *)L;
+    CHECK_LINKAGE(ml);
+    CHECK_PTR(ml, fn, form);
+    *form = L->dca_form;
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_set_tree_builder(aqs_linkage *L, int32_t builder)
 {
     static const char fn[] = "aqs_linkage_set_tree_builder";

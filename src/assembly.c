@@ -290,6 +290,7 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);
     lk_free(L, t->mscratch);
+    lk_free(L, t->hscratch);
     lk_free(L, t->stamp);
     lk_free(L, t->dirty);
     lk_free(L, t->dirty_tmp);
@@ -356,13 +357,14 @@ static void layout(tree *t)
         node *n = &t->nodes[i];
         int64_t h = n->nh;
         n->poses = pool_take(&t->nposes, h);
-        n->phi = pool_take(&t->ndata, 36 * h * h);
         n->bv = pool_take(&t->ndata, 6 * h);
         n->xf = pool_take(&t->ndata, 6 * h);
+        n->ic = pool_take(&t->ndata, 13);
+        n->lam = pool_take(&t->ndata, 36 * h * h);
         if (n->joint >= 0) {
             n->J = pool_take(&t->nposes, 1);
-            n->W = pool_take(&t->ndata, 36);
-            n->U = pool_take(&t->ndata, 6 * n->d);
+            n->W = pool_take(&t->ndata, 36 * h);
+            n->U = pool_take(&t->ndata, 6 * n->d * h);
             n->VS = pool_take(&t->ndata, 6 * n->d);
             n->rho = pool_take(&t->ndata, n->d);
             n->gamma = pool_take(&t->ndata, 6);
@@ -447,12 +449,15 @@ aqs_status assembly_build(aqs_linkage *L)
     /* dca_node_update: Y (6nh x 6) + Z and Z D^-1 (6nh x d, d <= 6 each) = 108 nh doubles */
     t->scratch = lk_calloc(L, 108 * (size_t)(t->max_handles + 2), sizeof(double));
     t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
+    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6) +
+                                (size_t)t->max_handles * (sizeof(pose) / sizeof(double) + 1),
+                            sizeof(double));
     t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->dirty_tmp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
     t->all_dirty = 1;
-    if (!t->poses || !t->scratch || !t->mscratch || !t->stamp || !t->dirty ||
+    if (!t->poses || !t->scratch || !t->mscratch || !t->hscratch || !t->stamp || !t->dirty ||
         !t->dirty_tmp) goto fail;
     lk_free(L, B.uf);
     lk_free(L, B.uf_node);

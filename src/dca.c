@@ -11,35 +11,10 @@
 #include "model.h"
 #include "update.h"
 
-/* Phi is stored block-major: the 6x6 block (i, j) of an nh-handle node is
- * contiguous at 36 (nh i + j), row-major inside. */
-static double *blk(double *phi, int32_t nh, int32_t i, int32_t j)
-{
-    return phi + 36 * ((int64_t)nh * i + j);
-}
-
-static const double *cblk(const double *phi, int32_t nh, int32_t i, int32_t j)
-{
-    return phi + 36 * ((int64_t)nh * i + j);
-}
-
-static void transpose6(const double *A, double *T)
-{
-    int i, j;
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) T[6 * j + i] = A[6 * i + j];
-}
-
-/* Make block (j, i) the transpose of block (i, j) for i < j, and (when
- * diagonal is set) the diagonal blocks symmetric. */
-static void symmetrize_blocks(double *phi, int32_t nh, int diagonal)
-{
-    int32_t i, j;
-    for (i = 0; i < nh; i++) {
-        if (diagonal) dense_symmetrize(blk(phi, nh, i, i), 6);
-        for (j = i + 1; j < nh; j++) transpose6(blk(phi, nh, i, j), blk(phi, nh, j, i));
-    }
-}
+static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp);
+static int mp_inverse_factor(const double *mp, double *Y);
+static int mp_inverse(const double *mp, double *Iinv);
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
 
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
@@ -51,7 +26,10 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
                        (long long)t->ndata);
     for (n = 0; n < t->nnodes; n++)
-        if (t->nodes[n].joint < 0) dca_leaf_phi(L, n);
+        if (t->nodes[n].joint < 0) {
+            if (L->dca_form == AQS_DCA_FORM_PHI) dca_phi_leaf(L, n);
+            else dca_leaf_phi(L, n);
+        }
     /* every b and internal node from scratch, loads and gravity included */
     t->all_dirty = 1;
     L->loads_dirty = L->gravity_dirty = 1;
@@ -62,28 +40,10 @@ void dca_leaf_phi(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     node *nd = &t->nodes[n];
-    double *phi = t->data + nd->phi;
-    const pose *P = t->poses + nd->poses;
-    int32_t i, j;
-    if (nd->comp == L->m.ncomp) {
-        memset(phi, 0, sizeof(double) * 36 * nd->nh * nd->nh); /* the world does not move */
-        return;
-    }
-    {
-        const double *Iinv = L->m.comp_inverse + 36 * nd->comp;
-        double *Y = t->scratch; /* nh blocks X_h I^{-1} */
-        double *X = t->scratch + 36 * nd->nh;
-        for (i = 0; i < nd->nh; i++) {
-            spatial_from_parent(&P[i], X);
-            dense_mul66(X, Iinv, Y + 36 * i);
-        }
-        /* Phi_{hh'} = X_h I^{-1} X_h'^T */
-        for (j = 0; j < nd->nh; j++) {
-            spatial_from_parent(&P[j], X);
-            for (i = 0; i <= j; i++) dense_mul66_nt(Y + 36 * i, X, blk(phi, nd->nh, i, j));
-        }
-        symmetrize_blocks(phi, nd->nh, 1);
-    }
+    nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
+    nd->grounded = nd->comp == L->m.ncomp;
+    if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
+    else mp_of_comp(L, nd->comp, t->data + nd->ic);
 }
 
 void dca_leaf_b(aqs_linkage *L, int32_t n)
@@ -101,7 +61,10 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         acc[4] = -L->gravity[1];
         acc[5] = -L->gravity[2];
     } else {
-        dense_matvec(L->m.comp_inverse + 36 * nd->comp, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
+        double Iinv[36];
+        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse(t->data + nd->ic, Iinv) != 0)
+            memcpy(Iinv, L->m.comp_inverse + 36 * nd->comp, sizeof Iinv);
+        dense_matvec(Iinv, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
     }
     for (i = 0; i < nd->nh; i++) {
         spatial_from_parent(&P[i], X);
@@ -110,43 +73,550 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
 }
 
 
-/* y = C^{-1} m for the lower-triangular 6x6 factor C (forward substitution). */
-static void lower_solve_row6(const double *Cf, const double *m, double *y)
+/* ---- Mass properties: a node's composite inertia is kept as mass, centre of
+ * mass and rotational inertia about it (mp[0] = m, mp[1..3] = c, mp[4..12] =
+ * Ic, 3x3 row-major; node frame), combined by the two-body parallel-axis rule
+ * (only sums of positive terms), and inverted through the centre of mass:
+ * I^-1 = E^T diag(Ic^-1, 1/m) E exactly, so neither a lever arm nor a tiny
+ * Ic costs digits (a 6x6 Cholesky of I in a far frame does). */
+
+/* acc += (m2, c2, I2): the two-body rule Ic = I1 + I2 + (m1 m2 / m) (|e|^2 - e e^T), e = c2 - c1. */
+static void mp_add(double *acc, double m2, const double c2[3], const double I2[9])
 {
-    int i, k;
-    for (i = 0; i < 6; i++) {
-        double v = m[i];
-        for (k = 0; k < i; k++) v -= Cf[6 * i + k] * y[k];
-        y[i] = v / Cf[7 * i];
+    double m1 = acc[0], m = m1 + m2, e[3], f, e2;
+    int i, j;
+    if (m1 == 0.0) {
+        acc[0] = m2;
+        memcpy(acc + 1, c2, 3 * sizeof(double));
+        memcpy(acc + 4, I2, 9 * sizeof(double));
+        return;
+    }
+    for (i = 0; i < 3; i++) e[i] = c2[i] - acc[1 + i];
+    f = m1 * m2 / m;
+    e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) acc[4 + 3 * i + j] += I2[3 * i + j] + f * ((i == j ? e2 : 0.0) - e[i] * e[j]);
+    for (i = 0; i < 3; i++) acc[1 + i] = (m1 * acc[1 + i] + m2 * c2[i]) / m;
+    acc[0] = m;
+    for (i = 0; i < 3; i++) /* exactly symmetric */
+        for (j = i + 1; j < 3; j++) acc[4 + 3 * j + i] = acc[4 + 3 * i + j];
+}
+
+/* acc += mp given in a frame with pose P in acc's frame. */
+static void mp_add_posed(double *acc, const pose *P, const double *mp)
+{
+    double c[3], RI[9], I[9];
+    int i, j, k;
+    mat3_vec(P->R, mp + 1, c);
+    for (i = 0; i < 3; i++) c[i] += P->p[i];
+    for (i = 0; i < 3; i++) /* R Ic R^T */
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += P->R[3 * i + k] * mp[4 + 3 * k + j];
+            RI[3 * i + j] = s;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += RI[3 * i + k] * P->R[3 * j + k];
+            I[3 * i + j] = I[3 * j + i] = s;
+        }
+    mp_add(acc, mp[0], c, I);
+}
+
+/* The composite's mass properties in its frame (its root body's), from its bodies. */
+static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp)
+{
+    const model *m = &L->m;
+    int32_t k;
+    memset(mp, 0, 13 * sizeof(double));
+    for (k = m->member_start[comp]; k < m->member_start[comp + 1]; k++) {
+        int32_t b = m->members[k];
+        const body_def *bd = &L->bodies[b];
+        double one[13];
+        one[0] = bd->mass;
+        memcpy(one + 1, bd->com, 3 * sizeof(double));
+        memcpy(one + 4, bd->inertia, 9 * sizeof(double));
+        mp_add_posed(mp, &m->body_in_comp[b], one);
     }
 }
 
-/* Index among a child's handles of the outer handle at position c of the
- * merged list [A-outer; B-outer]. */
-static int32_t child_index(int32_t c, int32_t k)
+/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
+ * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
+static int mp_inverse_factor(const double *mp, double *Y)
 {
-    return c < k ? c : c + 1;
+    const double m = mp[0], *c = mp + 1, *Ic = mp + 4;
+    double l00, l10, l11, l20, l21, l22, Li[9], Jc[9], S[9];
+    int i, j, k;
+    if (!(m > 0.0)) return -1;
+    l00 = Ic[0];
+    if (!(l00 > 0.0)) return -1;
+    l00 = sqrt(l00);
+    l10 = Ic[3] / l00;
+    l11 = Ic[4] - l10 * l10;
+    if (!(l11 > 0.0)) return -1;
+    l11 = sqrt(l11);
+    l20 = Ic[6] / l00;
+    l21 = (Ic[7] - l20 * l10) / l11;
+    l22 = Ic[8] - l20 * l20 - l21 * l21;
+    if (!(l22 > 0.0) || !isfinite(l22)) return -1;
+    l22 = sqrt(l22);
+    /* Li = Lc^-1 (lower) */
+    memset(Li, 0, sizeof Li);
+    Li[0] = 1.0 / l00;
+    Li[4] = 1.0 / l11;
+    Li[8] = 1.0 / l22;
+    Li[3] = -l10 * Li[0] / l11;
+    Li[7] = -l21 * Li[4] / l22;
+    Li[6] = -(l20 * Li[0] + l21 * Li[3]) / l22;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) Jc[3 * i + j] = Li[3 * j + i];
+    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
+    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
+    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
+    memset(Y, 0, 36 * sizeof(double));
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            Y[6 * i + j] = Jc[3 * i + j];
+            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
+            Y[6 * (3 + i) + j] = s;
+        }
+    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = 1.0 / sqrt(m);
+    return 0;
 }
 
-/* T = Phi^A_kk + Phi^B_kk is positive definite in exact arithmetic, but at
- * extreme mass ratios rounding can leave it indefinite by a hair (MATH.md
- * §3.8: plain Cholesky failed on 1e12 ratios). Retry with a diagonal shift
- * at the rounding level of T (1e-13, then 1e-11, 1e-9 of its largest
- * diagonal entry): the perturbation is below what the data resolve, while
- * an LU inverse of an indefinite T yields a negative S^T V S and garbage. */
-static int guarded_cholesky(const double *T, double *C)
+/* I^-1 = Y Y^T, exactly symmetric. */
+static int mp_inverse(const double *mp, double *Iinv)
 {
-    double shifted[36], scale = 0.0, shift;
-    int i, k;
-    if (dense_cholesky6(T, C) == 0) return 0;
+    double Y[36];
+    int i, j, k;
+    if (mp_inverse_factor(mp, Y) != 0) return -1;
     for (i = 0; i < 6; i++)
-        if (fabs(T[7 * i]) > scale) scale = fabs(T[7 * i]);
-    for (k = 0, shift = 1e-13 * scale; k < 3; k++, shift *= 100.0) {
-        memcpy(shifted, T, sizeof shifted);
-        for (i = 0; i < 6; i++) shifted[7 * i] += shift;
-        if (dense_cholesky6(shifted, C) == 0) return 0;
+        for (j = i; j < 6; j++) {
+            double s = 0.0;
+            for (k = 0; k < 6; k++) s += Y[6 * i + k] * Y[6 * j + k];
+            Iinv[6 * i + j] = Iinv[6 * j + i] = s;
+        }
+    return 0;
+}
+
+/* ---- Accurate Phi: rigid part from the composite inertia, internal part as
+ * a square-root factor (docs/math.md, "Accurate Phi").
+ *
+ * Phi of a node = G I^-1 G^T + Lambda Lambda^T, G the handles' motion
+ * transforms from the node frame, I the subassembly's composite inertia
+ * (a sum, formed without cancellation) and Lambda (6nh x rank) the mobility
+ * its internal joints add. Joining A and B at joint k: the two bodies'
+ * motions split into the common rigid motion (I_C = I_A + I_B) and the
+ * relative one, factored by Lm Lm^T = I_A^-1 + I_B^-1; the rows of the
+ * relative acceleration across k in the directions the joint does not free
+ * (Tc^T, Tc spanning S's orthogonal complement) are reduced by Householder
+ * reflections from the right, and what the outer rows keep beyond them is
+ * Lambda_C (compressed to 6nh columns the same way). Nothing is subtracted:
+ * Phi_C is a Gram matrix of reflected rows, so a rigid direction's tiny
+ * mobility (1/I of a long chain) keeps its relative accuracy, and a point
+ * mass's 1/k rotational mobility is removed by an orthogonal projection,
+ * not by a difference of 1/k-sized terms. */
+
+/* Reflect row r of the row-major A (ld columns) so that its entries in
+ * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
+ * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
+static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
+                        int32_t ncol, double *v)
+{
+    const double *x = A + (int64_t)ld * r + p;
+    int32_t m = ncol - p, i, j;
+    double scale = 0.0, ss = 0.0, alpha, f;
+    for (j = 1; j < m; j++)
+        if (fabs(x[j]) > scale) scale = fabs(x[j]);
+    if (scale == 0.0) return; /* nothing right of the pivot */
+    if (fabs(x[0]) > scale) scale = fabs(x[0]);
+    for (j = 0; j < m; j++) {
+        double y = x[j] / scale;
+        ss += y * y;
     }
-    return -1;
+    alpha = scale * sqrt(ss);
+    if (x[0] > 0.0) alpha = -alpha;
+    for (j = 0; j < m; j++) v[j] = x[j];
+    v[0] -= alpha; /* |v0| = |x0| + ||x||: no cancellation */
+    f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
+    for (i = r0; i < nrows; i++) {
+        double *a = A + (int64_t)ld * i + p, s = 0.0;
+        for (j = 0; j < m; j++) s += a[j] * v[j];
+        if (s == 0.0) continue;
+        s *= f;
+        for (j = 0; j < m; j++) a[j] -= s * v[j];
+    }
+}
+
+/* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
+ * row-major): columns q = 0 .. 5-d of Tc (row-major 6 x 6, column q). Gram-
+ * Schmidt twice over S's columns, then over the unit vectors, taking the
+ * largest remaining one each time. */
+static void complement(const double *S, int32_t d, double *Tc)
+{
+    double Q[36], v[6];
+    int32_t nq = 0, i, j, k, pass;
+    if (d == 1 && ((S[0] == 0.0 && S[1] == 0.0 && S[2] == 0.0) || (S[3] == 0.0 && S[4] == 0.0 && S[5] == 0.0))) {
+        /* A revolute or prismatic axis a (unit): in its half, two unit vectors
+         * orthogonal to a (Duff et al.'s branchless basis), and the other
+         * half's three axes. */
+        const int32_t h = S[0] == 0.0 && S[1] == 0.0 && S[2] == 0.0 ? 3 : 0, o = 3 - h;
+        double a[3], nrm, sg, aa, bb;
+        nrm = sqrt(S[h] * S[h] + S[h + 1] * S[h + 1] + S[h + 2] * S[h + 2]);
+        if (nrm > 0.0) {
+            for (i = 0; i < 3; i++) a[i] = S[h + i] / nrm;
+            sg = a[2] >= 0.0 ? 1.0 : -1.0;
+            aa = -1.0 / (sg + a[2]);
+            bb = a[0] * a[1] * aa;
+            memset(Tc, 0, 36 * sizeof(double));
+            /* columns 0, 1: b1 = (1 + sg a0^2 aa, sg bb, -sg a0), b2 = (bb, sg + a1^2 aa, -a1) */
+            Tc[6 * (h + 0) + 0] = 1.0 + sg * a[0] * a[0] * aa;
+            Tc[6 * (h + 1) + 0] = sg * bb;
+            Tc[6 * (h + 2) + 0] = -sg * a[0];
+            Tc[6 * (h + 0) + 1] = bb;
+            Tc[6 * (h + 1) + 1] = sg + a[1] * a[1] * aa;
+            Tc[6 * (h + 2) + 1] = -a[1];
+            for (i = 0; i < 3; i++) Tc[6 * (o + i) + 2 + i] = 1.0;
+            return;
+        }
+    }
+    for (j = 0; j < d + 6 && nq < 6; j++) {
+        double best = -1.0, nv;
+        if (j < d) {
+            for (i = 0; i < 6; i++) v[i] = S[i * d + j];
+        } else {
+            int32_t bi = 0;
+            for (k = 0; k < 6; k++) { /* the unit vector least inside span(Q) */
+                double w[6] = {0, 0, 0, 0, 0, 0}, s2 = 0.0;
+                w[k] = 1.0;
+                for (pass = 0; pass < 2; pass++)
+                    for (i = 0; i < nq; i++) {
+                        double dot = 0.0;
+                        int32_t l;
+                        for (l = 0; l < 6; l++) dot += Q[6 * i + l] * w[l];
+                        for (l = 0; l < 6; l++) w[l] -= dot * Q[6 * i + l];
+                    }
+                for (i = 0; i < 6; i++) s2 += w[i] * w[i];
+                if (s2 > best) {
+                    best = s2;
+                    bi = k;
+                }
+            }
+            for (i = 0; i < 6; i++) v[i] = i == bi ? 1.0 : 0.0;
+        }
+        for (pass = 0; pass < 2; pass++)
+            for (i = 0; i < nq; i++) {
+                double dot = 0.0;
+                for (k = 0; k < 6; k++) dot += Q[6 * i + k] * v[k];
+                for (k = 0; k < 6; k++) v[k] -= dot * Q[6 * i + k];
+            }
+        nv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+        if (!(nv > 1e-8)) continue; /* a dependent column of S */
+        for (k = 0; k < 6; k++) Q[6 * nq + k] = v[k] / nv;
+        nq++;
+    }
+    for (j = 0; j < 6 - d; j++)
+        for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
+}
+
+/* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
+ * column by column. */
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
+{
+    double col[6], o[6];
+    int32_t i, j;
+    for (j = 0; j < 6; j++) {
+        for (i = 0; i < 6; i++) col[i] = Z[6 * i + j];
+        spatial_xform_motion(P, col, o);
+        for (i = 0; i < 6; i++) out[(int64_t)ld * i + j] = o[i];
+    }
+}
+
+
+/* The joint's coefficients of node n from the rows reduced by the constraint
+ * reflections (all ncol wide): X = [X1 X2] the outer rows, Lc the first c
+ * columns of the c constraint rows (lower triangular), K = [K1 K2] the
+ * reflected L_k. With E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
+ *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Sd^T K2 X2^T,
+ *   U = Sd^T (1 - K1 E),  rho = -U beta + Sd^T K2 K2^T Sd Q,
+ *   gamma = E^T E beta + U^T Q,
+ *   b_C = b_o + X2 K2^T Sd Q + X1 E beta,
+ * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
+ * products of reduced factors only, no large mobility subtracted from
+ * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b. */
+static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *Tc,
+                              const double *X, const double *Lc, const double *K, int32_t ncol,
+                              const double beta[6], const double *Q, const double *bo)
+{
+    tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
+    double *bC = t->data + C->bv;
+    const int32_t c = 6 - d, orows = 6 * C->nh;
+    double E[36], U[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
+    int32_t i, j, k, r, o;
+    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
+    for (j = 0; j < 6; j++)
+        for (i = 0; i < c; i++) {
+            double x = Tc[6 * j + i];
+            double piv = Lc[(int64_t)i * ncol + i];
+            for (k = 0; k < i; k++) x -= Lc[(int64_t)i * ncol + k] * E[6 * k + j];
+            if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
+            E[6 * i + j] = x / piv;
+        }
+    /* Sd = S (S^T S)^-1 */
+    for (i = 0; i < d; i++)
+        for (j = 0; j < d; j++) {
+            double x = 0.0;
+            for (k = 0; k < 6; k++) x += S[k * d + i] * S[k * d + j];
+            StS[d * i + j] = x;
+        }
+    if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < d; j++) {
+            double x = 0.0;
+            for (k = 0; k < d; k++) x += S[i * d + k] * StSi[d * k + j];
+            Sd[i * d + j] = x;
+        }
+    /* P6 = 1 - K1 E; U = Sd^T P6 */
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double x = i == j ? 1.0 : 0.0;
+            for (k = 0; k < c; k++) x -= K[(int64_t)i * ncol + k] * E[6 * k + j];
+            P6[6 * i + j] = x;
+        }
+    for (r = 0; r < d; r++)
+        for (j = 0; j < 6; j++) {
+            double x = 0.0;
+            for (k = 0; k < 6; k++) x += Sd[k * d + r] * P6[6 * k + j];
+            U[6 * r + j] = x;
+        }
+    for (k = 0; k < c; k++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
+        Eb[k] = x;
+    }
+    /* FX = -E^T X1^T, and b_o + X1 E beta */
+    for (o = 0; o < orows; o++) {
+        const double *x1 = X + (int64_t)o * ncol;
+        double sb = 0.0;
+        for (i = 0; i < 6; i++) {
+            double x = 0.0;
+            for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
+            FX[(int64_t)i * orows + o] = x;
+        }
+        for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
+        bC[o] = bo[o] + sb;
+    }
+    /* K2 (6 x (ncol - c)) against Sd: kSd = K2^T Sd per column; G2 = Sd^T K2 K2^T Sd,
+     * QX = -Sd^T K2 X2^T, b_C += X2 K2^T Sd Q */
+    memset(G2, 0, sizeof G2);
+    for (i = 0; i < d * orows; i++) QX[i] = 0.0;
+    for (k = c; k < ncol; k++) {
+        double kq = 0.0;
+        for (r = 0; r < d; r++) {
+            double x = 0.0;
+            for (i = 0; i < 6; i++) x += K[(int64_t)i * ncol + k] * Sd[i * d + r];
+            kSd[r] = x;
+            kq += x * Q[r];
+        }
+        for (r = 0; r < d; r++)
+            for (j = 0; j < d; j++) G2[d * r + j] += kSd[r] * kSd[j];
+        for (o = 0; o < orows; o++) {
+            double x2 = X[(int64_t)o * ncol + k];
+            if (x2 == 0.0) continue;
+            for (r = 0; r < d; r++) QX[(int64_t)r * orows + o] -= kSd[r] * x2;
+            bC[o] += x2 * kq;
+        }
+    }
+    for (r = 0; r < d; r++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
+        for (j = 0; j < d; j++) x += G2[d * r + j] * Q[j];
+        rho[r] = x;
+        if (!isfinite(x)) return -1;
+    }
+    for (i = 0; i < 6; i++) {
+        double x = 0.0;
+        for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
+        for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
+        w[i] = x;
+    }
+    memcpy(gamma, w, sizeof w);
+    return 0;
+}
+
+/* Node n's composite inertia, Lambda and Phi from its children's, for the
+ * principal joint's subspace S (6 x d), and the joint's coefficients from the
+ * same reduction: with L_k the rows of the relative acceleration across k
+ * (T = L_k L_k^T), reflected into [K1 K2] while Tc^T L_k becomes [Lc 0]:
+ * E = Lc^-1 Tc^T (W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T), U = Sd^T (1 - K1 E),
+ * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
+ * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
+ * composite inertia is not positive definite or the joint cannot take a
+ * constraint force (Lc singular). */
+static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
+                      const double *Q)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
+    const pose *J = t->poses + C->J;
+    const double *IA = t->data + A->ic, *IBb = t->data + B->ic;
+    const double *LA = t->data + A->lam, *LB = t->data + B->lam;
+    double *IC = t->data + C->ic, *LC = t->data + C->lam;
+    const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
+    const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
+    const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
+    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = M + (int64_t)(orows + c) * ncol;
+    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36];
+    pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
+    int32_t i, j, r, q, ci, rank;
+
+    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
+    pose_compose(&Pk, &PB[C->kb], &Pkb);
+    memset(IB, 0, sizeof IB);
+    mp_add_posed(IB, &Pk, IBb);
+    C->grounded = A->grounded || B->grounded;
+    memset(IC, 0, 13 * sizeof(double));
+    if (!C->grounded) {
+        memcpy(IC, IA, 13 * sizeof(double));
+        mp_add(IC, IB[0], IB + 1, IB + 4);
+    }
+    /* The relative rigid mode, in square-root form, in the frame F at the
+     * centre of mass of the side with the larger mobility (C's axes): there
+     * that side's I^-1 = Y Y^T is block diagonal, so its large rotational
+     * mobility (a near point mass, a light part) stays out of the
+     * translational rows. [Y_A Y_B] is reflected from the right into
+     * [Lm 0], Lm Lm^T = I_A^-1 + I_B^-1 (nothing summed or inverted), and
+     * Z_A = I_A^-1 Lm^-T = Y_A (Lm^-1 Y_A)^T, Z_B = -Y_B (Lm^-1 Y_B)^T by
+     * forward substitution. */
+    {
+        double Yr[6 * 12], vr[12], YA[36], YB[36], mA[13], mB[13], cF[3] = {0, 0, 0}, wa = -1.0, wb = -1.0;
+        memcpy(mA, IA, sizeof mA);
+        memcpy(mB, IB, sizeof mB);
+        if (!A->grounded) {
+            if (mp_inverse_factor(mA, YA) != 0) return -1;
+            for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
+        }
+        if (!B->grounded) {
+            if (mp_inverse_factor(mB, YB) != 0) return -1;
+            for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
+        }
+        memcpy(cF, (wa >= wb ? mA : mB) + 1, sizeof cF);
+        for (i = 0; i < 3; i++) {
+            mA[1 + i] -= cF[i];
+            mB[1 + i] -= cF[i];
+        }
+        if (A->grounded) memset(YA, 0, sizeof YA);
+        else mp_inverse_factor(mA, YA);
+        if (B->grounded) memset(YB, 0, sizeof YB);
+        else mp_inverse_factor(mB, YB);
+        for (ci = 0; ci < nh; ci++) { /* the handles and k's child frame, seen from F */
+            PF[ci] = P[ci];
+            for (i = 0; i < 3; i++) PF[ci].p[i] -= cF[i];
+        }
+        PkbF = Pkb;
+        for (i = 0; i < 3; i++) PkbF.p[i] -= cF[i];
+        memset(Yr, 0, sizeof Yr);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                Yr[12 * i + j] = YA[6 * i + j];
+                Yr[12 * i + 6 + j] = YB[6 * i + j];
+            }
+        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 6, i, i, 12, vr);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
+        for (i = 0; i < 6; i++)
+            if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+        {
+            double Wa[36], Wb[36];
+            for (j = 0; j < 6; j++)
+                for (i = 0; i < 6; i++) {
+                    double xa = YA[6 * i + j], xb = YB[6 * i + j];
+                    for (r = 0; r < i; r++) {
+                        xa -= Lm[6 * i + r] * Wa[6 * r + j];
+                        xb -= Lm[6 * i + r] * Wb[6 * r + j];
+                    }
+                    Wa[6 * i + j] = xa / Lm[7 * i];
+                    Wb[6 * i + j] = xb / Lm[7 * i];
+                }
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < 6; j++) {
+                    double sa = 0.0, sb = 0.0;
+                    for (r = 0; r < 6; r++) {
+                        sa += YA[6 * i + r] * Wa[6 * j + r];
+                        sb += YB[6 * i + r] * Wb[6 * j + r];
+                    }
+                    ZA[6 * i + j] = sa;
+                    ZB[6 * i + j] = -sb;
+                }
+        }
+    }
+    memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (i = 0, ci = 0; i < nA; i++) {
+        if (i == C->ka) continue;
+        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6, LA + (int64_t)(6 * i + r) * ldA,
+                                       sizeof(double) * (size_t)rA);
+        ci++;
+    }
+    for (i = 0; i < nB; i++) {
+        if (i == C->kb) continue;
+        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6 + rA, LB + (int64_t)(6 * i + r) * ldB,
+                                       sizeof(double) * (size_t)rB);
+        ci++;
+    }
+    /* The relative acceleration across k (B's minus A's), in k's child frame. */
+    xform_cols(&PkbF, Lm, rel, ncol);
+    for (r = 0; r < 6; r++)
+        for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
+    for (j = 0; j < rA; j++) {
+        double col[6], o[6];
+        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
+        spatial_xform_motion(J, col, o);
+        for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
+    }
+    for (r = 0; r < 6; r++)
+        for (j = 0; j < rB; j++) rel[ncol * r + 6 + rA + j] = LB[(int64_t)(6 * C->kb + r) * ldB + j];
+    complement(S, d, Tc);
+    for (q = 0; q < c; q++) {
+        double *row = M + (int64_t)(orows + q) * ncol;
+        for (r = 0; r < 6; r++) {
+            double w = Tc[6 * r + q];
+            if (w == 0.0) continue;
+            for (j = 0; j < ncol; j++) row[j] += w * rel[ncol * r + j];
+        }
+    }
+    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, ncol, v);
+    {
+        /* b of the outer handles, in C's handle order */
+        double *bo = v + ncol; /* 6 nh doubles after the reflection vector */
+        const double *bA = t->data + A->bv, *bB = t->data + B->bv;
+        for (i = 0, ci = 0; i < nA; i++)
+            if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
+        for (i = 0; i < nB; i++)
+            if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
+        if (joint_coefficients(L, n, S, d, Tc, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
+    }
+    /* What the outer rows keep right of the c pivots is Lambda_C, compressed
+     * to lower-trapezoidal form (at most 6nh columns). */
+    /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
+     * internal dofs), else compressed to lower-trapezoidal form by reflections. */
+    rank = ncol - c;
+    if (rank > orows) {
+        for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+        rank = orows;
+    }
+    for (r = 0; r < orows; r++) {
+        memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
+        for (j = rank; j < orows; j++) LC[(int64_t)r * orows + j] = 0.0;
+    }
+    C->rank = rank;
+    return 0;
 }
 
 int dca_node_update(aqs_linkage *L, int32_t n)
@@ -157,218 +627,40 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
     const pose *J = t->poses + C->J;
-    double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
-    double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
-    double *M = t->mscratch, *phi = t->data + C->phi, *bC = t->data + C->bv;
-    const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
+    double *S = t->data + C->S;
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
-    int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
-    int32_t nAo = nA - 1, i, j, ci, cj;
-    double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
+    double beta[6], bk[6];
+    int32_t i;
 
+    if (L->dca_form == AQS_DCA_FORM_PHI) return dca_phi_node_update(L, n);
     /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
-
-    /* T = X Phi^A_kk X^T + Phi^B_kk, with A's k blocks moved into the child
-     * frame of k (§3.6); V = T^{-1} is used only through T's Cholesky
-     * factor C: V = C^{-T} C^{-1}. */
-    spatial_xform_congruence(J, cblk(phiA, nA, ka, ka), T);
-    {
-        const double *Bkk = cblk(phiB, nB, kb, kb);
-        for (i = 0; i < 36; i++) T[i] += Bkk[i]; /* both exactly symmetric: so is T */
-    }
-    if (guarded_cholesky(T, Cf) != 0) return -1;
-
-    /* M = [Phi^A_ok X^T ; -Phi^B_ok], one 6x6 block per outer handle. */
-    for (ci = 0; ci < nAo; ci++) spatial_xform_rows(J, cblk(phiA, nA, child_index(ci, ka), ka), M + 36 * ci);
-    for (ci = nAo; ci < nh; ci++) {
-        const double *src = cblk(phiB, nB, child_index(ci - nAo, kb), kb);
-        for (i = 0; i < 36; i++) M[36 * ci + i] = -src[i];
-    }
-
-    spatial_xform_motion(J, bA + 6 * ka, bk); /* b^A_k in the child frame */
-    for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * kb + i];
-    dense_cholesky6_lower_solve(Cf, beta, tmp, 1);
-    dense_cholesky6_upper_solve(Cf, tmp, Vb, 1); /* V beta */
-
-    if (d == 6) {
-        /* Free joint: S = I, so U = I, W = 0, gamma = Q, rho = T Q - beta. */
-        memset(U, 0, 36 * sizeof(double));
-        for (i = 0; i < 6; i++) U[7 * i] = 1.0;
-        dense_matvec6(T, Q, rho);
-        for (i = 0; i < 6; i++) {
-            rho[i] -= beta[i];
-            gamma[i] = Q[i];
-        }
-    } else {
-        /* C^{-1} S, V S = C^{-T} C^{-1} S, and D = S^T V S formed as the Gram
-         * matrix of C^{-1} S: it cannot lose definiteness to rounding. */
-        dense_cholesky6_lower_solve(Cf, S, Ws, d);
-        dense_cholesky6_upper_solve(Cf, Ws, VS, d);
-        if (d == 1) {
-            double Dv = 0.0, sb = 0.0;
-            for (i = 0; i < 6; i++) Dv += Ws[i] * Ws[i];
-            if (!(Dv > 0.0) || !isfinite(Dv)) return -1;
-            Dinv[0] = 1.0 / Dv;
-            for (i = 0; i < 6; i++) {
-                U[i] = VS[i] * Dinv[0];
-                sb += VS[i] * beta[i];
-            }
-            rho[0] = (Q[0] - sb) * Dinv[0];
-            for (i = 0; i < 6; i++) gamma[i] = Vb[i] + VS[i] * rho[0];
-        } else {
-            dense_mul_tn(Ws, Ws, D, d, 6, d);
-            dense_symmetrize(D, d);
-            if (dense_spd_inverse(D, Dinv, d) != 0) return -1;
-            dense_mul_nt(Dinv, VS, U, d, d, 6); /* U = D^{-1} (V S)^T */
-            dense_tmatvec(VS, beta, tmp, 6, d); /* rho = D^{-1} (Q - S^T V beta) */
-            for (i = 0; i < d; i++) tmp[i] = Q[i] - tmp[i];
-            dense_matvec(Dinv, tmp, rho, d, d);
-            /* gamma = W beta + U^T Q = V beta + V S rho, since W = V - V S U */
-            dense_matvec(VS, rho, gamma, 6, d);
-            for (i = 0; i < 6; i++) gamma[i] += Vb[i];
-        }
-    }
-
-    /* Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T with
-     * M W M^T = (M C^{-T})(M C^{-T})^T - (M V S) D^{-1} (M V S)^T;
-     * b_C = [b^A_o; b^B_o] - M gamma. A free joint has W = 0. */
-    {
-        double *Y = t->scratch, *Z = t->scratch + 36 * nh, *ZD = Z + 6 * nh * 6;
-        if (d < 6) {
-            for (ci = 0; ci < 6 * nh; ci++) lower_solve_row6(Cf, M + 6 * ci, Y + 6 * ci);
-            if (d == 1) {
-                for (ci = 0; ci < 6 * nh; ci++) {
-                    double z = 0.0;
-                    for (j = 0; j < 6; j++) z += M[6 * ci + j] * VS[j];
-                    Z[ci] = z;
-                    ZD[ci] = z * Dinv[0];
-                }
-            } else {
-                dense_mul(M, VS, Z, 6 * nh, 6, d);   /* Z = M V S */
-                dense_mul(Z, Dinv, ZD, 6 * nh, d, d); /* Z D^{-1} */
-            }
-        }
-        for (ci = 0; ci < nh; ci++)
-            for (cj = ci; cj < nh; cj++) {
-                double *out = blk(phi, nh, ci, cj);
-                int same = (ci < nAo) == (cj < nAo);
-                const double *base =
-                    !same ? NULL
-                    : ci < nAo ? cblk(phiA, nA, child_index(ci, ka), child_index(cj, ka))
-                               : cblk(phiB, nB, child_index(ci - nAo, kb), child_index(cj - nAo, kb));
-                if (d == 1 && ci == cj) {
-                    /* a diagonal block is symmetric: its upper triangle only */
-                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj, *y = Y + 36 * ci;
-                    int r, c, k;
-                    for (r = 0; r < 6; r++)
-                        for (c = r; c < 6; c++) {
-                            double sum = 0.0;
-                            for (k = 0; k < 6; k++) sum += y[6 * r + k] * y[6 * c + k];
-                            out[6 * r + c] = out[6 * c + r] = zd[r] * z[c] - sum + base[6 * r + c];
-                        }
-                } else if (d == 1) {
-                    const double *zd = ZD + 6 * ci, *z = Z + 6 * cj;
-                    int r, c;
-                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
-                    for (r = 0; r < 6; r++)
-                        for (c = 0; c < 6; c++) out[6 * r + c] = zd[r] * z[c] - out[6 * r + c];
-                    if (base)
-                        for (i = 0; i < 36; i++) out[i] += base[i];
-                } else if (d < 6) {
-                    int r, c, k;
-                    dense_mul66_nt(Y + 36 * ci, Y + 36 * cj, out);
-                    for (r = 0; r < 6; r++)
-                        for (c = 0; c < 6; c++) {
-                            double sum = 0.0;
-                            for (k = 0; k < d; k++) sum += ZD[(6 * ci + r) * d + k] * Z[(6 * cj + c) * d + k];
-                            out[6 * r + c] = (base ? base[6 * r + c] : 0.0) - out[6 * r + c] + sum;
-                        }
-                    if (ci == cj) dense_symmetrize(out, 6);
-                } else {
-                    for (i = 0; i < 36; i++) out[i] = base ? base[i] : 0.0;
-                }
-            }
-        symmetrize_blocks(phi, nh, 0); /* diagonal blocks were formed symmetric */
-        for (ci = 0; ci < nh; ci++) {
-            const double *src = ci < nAo ? bA + 6 * child_index(ci, ka) : bB + 6 * child_index(ci - nAo, kb);
-            dense_matvec6(M + 36 * ci, gamma, tmp);
-            for (i = 0; i < 6; i++) bC[6 * ci + i] = src[i] - tmp[i];
-        }
-    }
-    return 0;
+    spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
+    for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
+    return hybrid_phi(L, n, S, C->d, beta, Q);
 }
 
-/* M W g = M V g - M V S (U g) = Y (C^{-1} g) - ZD (V S)^T g, from the
- * products dca_node_update left in the scratch: Y = M C^{-T} (6nh x 6) and
- * ZD = M V S D^{-1} (6nh x d). */
+/* M W g = (W M^T)^T g = FX^T g. */
 void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out)
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const double *Y = t->scratch, *ZD = t->scratch + 72 * C->nh, *VS = t->data + C->VS;
-    const int32_t rows = 6 * C->nh, d = C->d;
-    double u[6], v[6];
-    int32_t i, k;
-    if (d == 6) {
-        for (i = 0; i < rows; i++) out[i] = 0.0;
-        return;
-    }
-    lower_solve_row6(t->data + C->W, g, u);
-    for (k = 0; k < d; k++) {
-        double s = 0.0;
-        for (i = 0; i < 6; i++) s += VS[i * d + k] * g[i];
-        v[k] = s;
-    }
-    if (d == 1) { /* revolute, prismatic: ZD is a column */
-        for (i = 0; i < rows; i++) {
-            const double *y = Y + 6 * i;
-            out[i] = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5] -
-                     ZD[i] * v[0];
-        }
-        return;
-    }
-    for (i = 0; i < rows; i++) {
-        const double *y = Y + 6 * i, *zd = ZD + (int64_t)i * d;
-        double s = y[0] * u[0] + y[1] * u[1] + y[2] * u[2] + y[3] * u[3] + y[4] * u[4] + y[5] * u[5];
-        for (k = 0; k < d; k++) s -= zd[k] * v[k];
-        out[i] = s;
-    }
+    const double *FX = t->data + C->W;
+    const int32_t rows = 6 * C->nh;
+    int32_t i;
+    for (i = 0; i < rows; i++)
+        out[i] = FX[i] * g[0] + FX[rows + i] * g[1] + FX[2 * rows + i] * g[2] + FX[3 * rows + i] * g[3] +
+                 FX[4 * rows + i] * g[4] + FX[5 * rows + i] * g[5];
 }
 
-/* (U M^T)_{r,i} = (M V S D^{-1})_{i,r} = ZD_{i,r} (U = D^{-1} (V S)^T, D
- * symmetric); a free joint has U = I: M's column r. */
+/* Row r of U M^T = QX. */
 void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const int32_t rows = 6 * C->nh, d = C->d;
-    int32_t i;
-    if (d == 6) {
-        for (i = 0; i < rows; i++) out[i] = t->mscratch[6 * i + r];
-        return;
-    }
-    for (i = 0; i < rows; i++) out[i] = t->scratch[72 * C->nh + (int64_t)i * d + r];
-}
-
-void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
-{
-    const tree *t = &L->t;
-    const node *C = &t->nodes[n];
-    const double *Cf = t->data + C->W, *U = t->data + C->U, *VS = t->data + C->VS;
-    double tmp[6], uh[6];
-    int i;
-    if (C->d == 6) {
-        for (i = 0; i < 6; i++) out[i] = 0.0;
-        return;
-    }
-    /* W h = V h - V S (U h) */
-    dense_cholesky6_lower_solve(Cf, h, tmp, 1);
-    dense_cholesky6_upper_solve(Cf, tmp, out, 1);
-    dense_matvec(U, h, uh, C->d, 6);
-    dense_matvec(VS, uh, tmp, 6, C->d);
-    for (i = 0; i < 6; i++) out[i] -= tmp[i];
+    const int32_t rows = 6 * C->nh;
+    memcpy(out, t->data + C->U + (int64_t)r * rows, sizeof(double) * (size_t)rows);
 }
 
 void dca_node_backsub(aqs_linkage *L, int32_t n)
@@ -377,35 +669,27 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     const node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *x = t->data + C->xf;
-    const double *phiA = t->data + A->phi, *phiB = t->data + B->phi;
-    const double *U = t->data + C->U;
+    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
     const pose *J = (t->poses + C->J);
     const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *xA = t->data + A->xf, *xB = t->data + B->xf;
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
-    int32_t nA = A->nh, nB = B->nh, i, ci, d = C->d;
-    double h[6], tmp[6];
+    int32_t nA = A->nh, nB = B->nh, i, k, ci, d = C->d, rows = 6 * C->nh;
+    double tmp[6];
 
-    /* h = Phi^A_ko x_A - Phi^B_ko x_B (eq. 4, 5), from the children's blocks:
-     * = X sum_i (Phi^A_{i,k})^T x_i - sum_j (Phi^B_{j,k})^T x_j. */
-    {
-        double ha[6] = {0, 0, 0, 0, 0, 0};
-        int32_t nAo = nA - 1;
-        for (ci = 0; ci < nAo; ci++) {
-            dense_tmatvec6(cblk(phiA, nA, child_index(ci, C->ka), C->ka), x + 6 * ci, tmp);
-            for (i = 0; i < 6; i++) ha[i] += tmp[i];
-        }
-        spatial_xform_motion(J, ha, h);
-        for (ci = nAo; ci < C->nh; ci++) {
-            dense_tmatvec6(cblk(phiB, nB, child_index(ci - nAo, C->kb), C->kb), x + 6 * ci, tmp);
-            for (i = 0; i < 6; i++) h[i] -= tmp[i];
-        }
+    /* qdd = rho - QX x, f = gamma + FX x (x: C's handle forces) */
+    for (i = 0; i < d; i++) {
+        const double *qr = QX + (int64_t)i * rows;
+        double s = rho[i];
+        for (k = 0; k < rows; k++) s -= qr[k] * x[k];
+        qdd[i] = s;
     }
-    dense_matvec(U, h, tmp, d, 6);
-    for (i = 0; i < d; i++) qdd[i] = rho[i] - tmp[i];
-    dca_apply_W(L, n, h, f);
-    for (i = 0; i < 6; i++) f[i] += gamma[i];
+    for (i = 0; i < 6; i++) {
+        const double *fr = FX + (int64_t)i * rows;
+        double s = gamma[i];
+        for (k = 0; k < rows; k++) s += fr[k] * x[k];
+        f[i] = s;
+    }
 
     for (i = 0, ci = 0; i < nA; i++) {
         if (i == C->ka) continue;

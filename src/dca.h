@@ -1,35 +1,40 @@
 /* dca.h -- articulated-body coefficients of the assembly tree's nodes and the
- * exact back-substitution (MATH.md §3). */
+ * exact back-substitution (MATH.md §3; docs/math.md, "Accurate Phi"). Two
+ * forms of the node update share the outputs below: the square-root form
+ * (src/dca.c, AQS_DCA_FORM_SQRT, the default) and the inverse-inertia form
+ * (src/dca_phi.c, AQS_DCA_FORM_PHI). */
 #ifndef AQS_DCA_H
 #define AQS_DCA_H
 
 #include "linkage.h"
 
-/* Allocate the tree's DCA coefficients (Phi, b, handle forces, W, U, ...)
- * and compute the leaves' Phi, once: a linkage solved only exactly by the
- * articulated-body algorithm never needs them. Marks every node stale.
- * AQS_OK or AQS_ENOMEM (message naming fn). */
+/* Allocate the tree's DCA coefficients (mass properties, Lambda or Phi, b,
+ * handle forces, FX, QX, ...) and set up the leaves, once: a linkage solved
+ * only exactly by the articulated-body algorithm never needs them. Marks
+ * every node stale. AQS_OK or AQS_ENOMEM (message naming fn). */
 aqs_status dca_enable(aqs_linkage *L, const char *fn);
-/* Leaf Phi (constant after finalize; the world leaf's is zero). */
+/* Leaf set-up of the square-root form: mass properties, rank 0 (constant
+ * after finalize; the world leaf is grounded). */
 void dca_leaf_phi(aqs_linkage *L, int32_t n);
+/* Leaf Phi of the inverse-inertia form, in the node's Lambda storage. */
+void dca_phi_leaf(aqs_linkage *L, int32_t n);
 /* Leaf b from the composite's external load (world leaf: from gravity). */
 void dca_leaf_b(aqs_linkage *L, int32_t n);
-/* Internal node: X, W, U, rho, gamma, S, M, Phi, b from its children and
- * the principal joint's position and force. Returns 0, or -1 when the
- * articulated inertia is numerically singular. */
+/* Internal node: its coefficients (rho, gamma, S, b, FX = W M^T, QX =
+ * U M^T, and Lambda or Phi) from its children and the principal joint's
+ * position and force, in the linkage's DCA form. Returns 0, or -1 when
+ * the articulated inertia is numerically singular. */
 int dca_node_update(aqs_linkage *L, int32_t n);
-/* out = W h for internal node n (W = V - V S U, applied through the stored
- * Cholesky factor of T; zero for a free joint). */
-void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6]);
-/* Right after dca_node_update(L, n), from the products it left in the
- * scratch (valid until the next node update): out (6 nh) = M W g for a
- * 6-vector g, i.e. the handle part of g^T [W M^T], without forming W. */
+/* The inverse-inertia form of dca_node_update (src/dca_phi.c). */
+int dca_phi_node_update(aqs_linkage *L, int32_t n);
+/* out (6 nh) = M W g for a 6-vector g (the handle part of g^T [W M^T]):
+ * FX^T g. */
 void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out);
-/* Right after dca_node_update(L, n): out (6 nh) = row r < d of U M^T. */
+/* out (6 nh) = row r < d of U M^T (= QX). */
 void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
- * the children's handle forces. */
+ * the children's handle forces: qdd = rho - QX x, f = gamma + FX x. */
 void dca_node_backsub(aqs_linkage *L, int32_t n);
 /* Constraint forces of the fixed joints inside composite c, from its leaf's
  * handle forces x (6 per handle, in the handles' frames: the DCA's are set

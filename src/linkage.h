@@ -31,10 +31,17 @@ typedef struct {
     int32_t d;            /* dofs of the principal joint */
     int64_t handles;      /* nh effective joint indices, in tree.handles */
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
-    int64_t phi, bv, xf;  /* Phi (6nh x 6nh), b (6nh), handle forces x (6nh), in tree.data */
+    int64_t bv, xf;       /* b (6nh), handle forces x (6nh), in tree.data */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
-    int64_t W;            /* Cholesky factor C of T = V^{-1} (6x6 lower); W = V - V S U */
-    int64_t U, VS, rho, gamma, S; /* §3.4: U (d x 6), V S (6 x d), rho (d), gamma (6), S (6 x d) */
+    int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
+    int64_t U, VS, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; VS unused; rho (d),
+                                     gamma (6), S (6 x d); x: the node's handle forces */
+    int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
+                             about it (13 doubles, node frame; zero when grounded) */
+    int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
+                             + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
+    int32_t rank;         /* columns of Lambda (0 for leaves) */
+    int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
     int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
@@ -56,6 +63,8 @@ typedef struct {
     int32_t height, max_handles;
     double mean_handles;
     double *scratch;  /* 84 * (max_handles + 2) doubles */
+    double *hscratch; /* (6 max_handles + 13) x (12 max_handles + 6): the stacked factor of
+                         dca_node_update, its reflection vector and relative rows */
     double *mscratch; /* 36 * (max_handles + 1): M = [Phi^A_ok X^T; -Phi^B_ok] of the node
                          being updated (6nh x 6), not stored per node */
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
@@ -186,6 +195,7 @@ struct aqs_linkage {
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
+    int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */

@@ -26,6 +26,7 @@ REQUIRED = {
     "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
     "fallback": (int, float), "fallback_steps": int,
     "prediction": (int, float), "nodes_predicted": (int, float), "factors_updated": (int, float),
+    "dca_form": str,
     "ratio_R_aba": float,
 }
 
@@ -209,11 +210,26 @@ def test_tip_path(tmp_path):
     (["--steps"], "needs a value"),
     (["--fallback", "1.5"], "--fallback"),
     (["--prediction", "0.5"], "--prediction"),
+    (["--dca-form", "cholesky"], "--dca-form"),
 ])
 def test_bad_input(args, message):
     res = run("--joints", "200", "--quiet", *args, check=False)
     assert res.returncode != 0
     assert message in res.stderr
+
+
+def test_dca_form(tmp_path):
+    """--dca-form phi and sqrt (the default): the same scene and loads, the
+    same joints computed to within the rounding of the two forms, and the
+    form recorded in the JSON."""
+    out = tmp_path / "forms.jsonl"
+    args = ("--scene", "molecule", "--joints", "400", "--steps", "3", "--exact-every", "3",
+            "--quiet", "--eps", "2^-10")
+    run(*args, "--out", str(out))
+    run(*args, "--dca-form", "phi", "--append", "--out", str(out))
+    sq, ph = [json.loads(x) for x in out.read_text().splitlines()]
+    assert sq["dca_form"] == "sqrt" and ph["dca_form"] == "phi"
+    assert abs(sq["computed_joints"] - ph["computed_joints"]) <= 0.02 * max(1.0, ph["computed_joints"])
 
 
 def test_export_urdf(tmp_path):

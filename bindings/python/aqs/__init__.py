@@ -76,6 +76,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
                    EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN,
+                   DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
@@ -92,6 +93,7 @@ __all__ = [
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
     "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN",
+    "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
@@ -772,6 +774,23 @@ class Linkage:
         sqrt of their sum), or an aqs.JOINT_BOUND_* constant. After finalize."""
         f = "aqs_linkage_set_joint_bound"
         self._call(f, _named(kind, JOINT_BOUNDS, f, "kind"))
+
+    def set_dca_form(self, form):
+        """How the divide-and-conquer solver keeps a subassembly's inverse
+        inertia (aqs_linkage_set_dca_form): "sqrt" (the default: composite
+        inertia plus a square-root factor, accurate on long chains, near
+        point masses and large mass ratios) or "phi" (the explicit matrix:
+        fewer instructions per node, fewer digits on those cases), or an
+        aqs.DCA_FORM_* value. Only before finalize()."""
+        f = "aqs_linkage_set_dca_form"
+        self._call(f, _named(form, DCA_FORMS, f, "form"))
+
+    @property
+    def dca_form(self):
+        """The DCA form in use: "sqrt" or "phi" (aqs_linkage_get_dca_form)."""
+        value = ctypes.c_int32()
+        self._call("aqs_linkage_get_dca_form", ctypes.byref(value))
+        return DCA_FORM_NAMES[value.value]
 
     def set_exact_solver(self, solver):
         """Which algorithm computes an exact solve (eps = 0, no cap)

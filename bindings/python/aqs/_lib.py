@@ -103,6 +103,15 @@ EXACT_SOLVERS = {
 }
 EXACT_SOLVER_NAMES = {value: name for name, value in EXACT_SOLVERS.items()}
 
+# How the divide-and-conquer solver keeps Phi (AQS_DCA_FORM_*).
+DCA_FORM_SQRT = 0  # composite inertia + square-root factor (default; accurate)
+DCA_FORM_PHI = 1   # explicit Phi (faster per node, loses digits on hard cases)
+DCA_FORMS = {
+    "sqrt": DCA_FORM_SQRT,
+    "phi": DCA_FORM_PHI,
+}
+DCA_FORM_NAMES = {value: name for name, value in DCA_FORMS.items()}
+
 # How finalize builds the assembly tree (AQS_TREE_*).
 TREE_CONTRACTION = 0  # rake and compress rounds (default)
 TREE_BISECTION = 1    # recursive bisection at the most balancing joint
@@ -277,6 +286,8 @@ PROTOTYPES = {
     "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_set_exact_solver": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
+    "aqs_linkage_set_dca_form": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_get_dca_form": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_prediction": (status_t, [linkage_p, ctypes.c_double]),
