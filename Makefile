@@ -196,6 +196,7 @@ $(HARDREF_SO): tests/reference/hardref_c.cpp tests/reference/hard_reference.hpp 
 .PHONY: check-hard bench-hard
 check-hard: $(HARDCASES)
 	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick.jsonl
+	$(HARDCASES) --dca-form phi --json $(abspath $(BUILD))/hardcases-quick-phi.jsonl
 bench-hard: $(HARDCASES)
 	@mkdir -p docs/hardcases
 	$(HARDCASES) --long --json docs/hardcases/long.jsonl | tee docs/hardcases/long.txt
