@@ -365,7 +365,6 @@ static void layout(tree *t)
             n->J = pool_take(&t->nposes, 1);
             n->W = pool_take(&t->ndata, 36 * h);
             n->U = pool_take(&t->ndata, 6 * n->d * h);
-            n->VS = pool_take(&t->ndata, 6 * n->d);
             n->rho = pool_take(&t->ndata, n->d);
             n->gamma = pool_take(&t->ndata, 6);
             n->S = pool_take(&t->ndata, 6 * n->d);

@@ -232,14 +232,21 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
         if (fabs(x[j]) > scale) scale = fabs(x[j]);
     if (scale == 0.0) return; /* nothing right of the pivot */
     if (fabs(x[0]) > scale) scale = fabs(x[0]);
-    for (j = 0; j < m; j++) {
-        double y = x[j] / scale;
-        ss += y * y;
+    {
+        int e;
+        frexp(scale, &e);
+        scale = ldexp(1.0, e); /* a power of two: x / scale is exact */
     }
-    alpha = scale * sqrt(ss);
-    if (x[0] > 0.0) alpha = -alpha;
-    for (j = 0; j < m; j++) v[j] = x[j];
-    v[0] -= alpha; /* |v0| = |x0| + ||x||: no cancellation */
+    /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
+     * needs): every quantity is O(1), so neither tiny (subnormal) nor huge
+     * entries underflow or overflow in alpha v0. */
+    for (j = 0; j < m; j++) {
+        v[j] = x[j] / scale;
+        ss += v[j] * v[j];
+    }
+    alpha = sqrt(ss);
+    if (v[0] > 0.0) alpha = -alpha;
+    v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
     for (i = r0; i < nrows; i++) {
         double *a = A + (int64_t)ld * i + p, s = 0.0;

@@ -34,8 +34,8 @@ typedef struct {
     int64_t bv, xf;       /* b (6nh), handle forces x (6nh), in tree.data */
     int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
     int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
-    int64_t U, VS, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; VS unused; rho (d),
-                                     gamma (6), S (6 x d); x: the node's handle forces */
+    int64_t U, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
+                                 S (6 x d); x: the node's handle forces */
     int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
                              about it (13 doubles, node frame; zero when grounded) */
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T

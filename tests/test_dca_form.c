@@ -173,6 +173,48 @@ static void test_long_straight_chain(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* A nearly straight planar chain (1,500 links, angles of 1e-6, a tip force,
+ * no gravity): its out-of-plane rows are exact zeros up to subnormal
+ * rounding, which once made a Householder reflection divide by an
+ * underflowed 0 (NaN, then "numerically singular"; found by
+ * tests/python/test_threads.py). Both the exact DCA (against the ABA, 1e-12:
+ * ordinary data) and an adaptive solve at every eps must succeed. */
+static void test_nearly_straight_chain(void **state)
+{
+    const int32_t n = 1500;
+    aqs_linkage *L = straight_chain(AQS_DCA_FORM_SQRT, n);
+    double *a = malloc(sizeof(double) * n), *d = malloc(sizeof(double) * n), zero[3] = {0, 0, 0};
+    const double tip[3] = {0, 1.0, 0};
+    uint64_t rng = 7;
+    aqs_status st;
+    int32_t i, k;
+    (void)state;
+    assert_non_null(a);
+    assert_non_null(d);
+    assert_int_equal(aqs_linkage_set_gravity(L, zero), AQS_OK);
+    assert_int_equal(aqs_body_set_force(L, n - 1, tip, NULL, NULL), AQS_OK);
+    for (i = 0; i < n; i++) a[i] = test_uniform(&rng, -1e-6, 1e-6);
+    assert_int_equal(aqs_linkage_set_positions(L, a, n), AQS_OK);
+    solve_both(L, a, d, n, &st);
+    assert_int_equal(st, AQS_OK);
+    assert_true(test_rel_diff(d, a, (size_t)n) < 1e-12);
+    for (k = 0; k < 20; k++) {
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -k)), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    }
+    /* the sequence of the Python test: from q = 0, an exact step, then an adaptive solve */
+    for (i = 0; i < n; i++) a[i] = 0.0;
+    assert_int_equal(aqs_linkage_set_positions(L, a, n), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    free(a);
+    free(d);
+    aqs_linkage_destroy(L);
+}
+
 /* A 6-link spatial chain whose third body is a 0.75 kg near point mass
  * (rotational inertia k I), and one with 20 links of 1e-9 kg behind 20 of
  * 1000 kg. Measured (docs/hardcases.md): square-root form 1.3e-11 at
@@ -236,6 +278,7 @@ int main(void)
         cmocka_unit_test(test_forms_agree),
         cmocka_unit_test(test_long_straight_chain),
         cmocka_unit_test(test_small_inertias),
+        cmocka_unit_test(test_nearly_straight_chain),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
