@@ -37,6 +37,15 @@ CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -
                  -I/usr/include/eigen3 $(SANFLAGS)
 LDLIBS := -lccd -lm
 
+# URDF loading (src/urdf.c) with expat, an optional feature: on when
+# pkg-config finds expat, off with AQS_URDF=0 (the load functions then return
+# AQS_ESTATE saying so). AQS_URDF=1 insists on it.
+AQS_URDF ?= $(shell pkg-config --exists expat 2>/dev/null && echo 1 || echo 0)
+ifeq ($(AQS_URDF),1)
+CFLAGS_LIB += -DAQS_HAVE_EXPAT $(shell pkg-config --cflags expat 2>/dev/null)
+LDLIBS += $(or $(shell pkg-config --libs expat 2>/dev/null),-lexpat)
+endif
+
 SRCS := $(sort $(wildcard src/*.c))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
 SONAME := libaqs.so.$(MAJOR)

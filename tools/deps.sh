@@ -8,7 +8,7 @@
 set -euo pipefail
 peers=0
 [ "${1:-}" = "--peers" ] && peers=1
-pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config)
+pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config libexpat1-dev)
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
