@@ -322,6 +322,23 @@ static aqs_status numbers(doc *d, int32_t e, const char *name, int count, const 
     return AQS_OK;
 }
 
+/* The shortest of 15, 16, 17 significant digits that reads back as v (as
+ * Python's repr does). */
+typedef struct {
+    char s[32];
+} numtext;
+
+static numtext num(double v)
+{
+    numtext t;
+    int p;
+    for (p = 15; p <= 17; p++) {
+        snprintf(t.s, sizeof t.s, "%.*g", p, v);
+        if (strtod(t.s, NULL) == v) break;
+    }
+    return t;
+}
+
 static aqs_status origin(doc *d, int32_t e, const char *where, double xyz[3], double rpy[3])
 {
     static const double zero[3] = {0, 0, 0};
@@ -459,13 +476,13 @@ static aqs_status read_inertial(model_in *m, ulink *lk)
     snprintf(where, sizeof where, "link '%.150s' <mass>", lk->name);
     if ((st = numbers(d, me, "value", 1, NULL, where, &lk->mass)) != AQS_OK) return st;
     if (lk->mass < 0.0)
-        return fail(d, AQS_EINVAL, "link '%s': mass = %.17g is negative", lk->name, lk->mass);
+        return fail(d, AQS_EINVAL, "link '%s': mass = %s is negative", lk->name, num(lk->mass).s);
     memcpy(lk->com, xyz, sizeof xyz);
     ie = child(d, e, "inertia");
     if (ie < 0) {
         if (lk->mass > 0.0)
-            return fail(d, AQS_EINVAL, "link '%s': <inertial> has mass %.17g but no <inertia>",
-                        lk->name, lk->mass);
+            return fail(d, AQS_EINVAL, "link '%s': <inertial> has mass %s but no <inertia>",
+                        lk->name, num(lk->mass).s);
         return AQS_OK;
     }
     snprintf(where, sizeof where, "link '%.150s' <inertia>", lk->name);
@@ -557,16 +574,16 @@ static aqs_status read_joint(model_in *m, int32_t e, ujoint *j)
                 (st = numbers(d, le, "upper", 1, &zero, w, &j->limits[1])) != AQS_OK)
                 return st;
             if (j->limits[0] > j->limits[1])
-                return fail(d, AQS_EINVAL, "%s: lower = %.17g is above upper = %.17g", w,
-                            j->limits[0], j->limits[1]);
+                return fail(d, AQS_EINVAL, "%s: lower = %s is above upper = %s", w,
+                            num(j->limits[0]).s, num(j->limits[1]).s);
         }
         if ((st = numbers(d, le, "effort", 1, &inf, w, &j->limits[2])) != AQS_OK ||
             (st = numbers(d, le, "velocity", 1, &inf, w, &j->limits[3])) != AQS_OK)
             return st;
         if (attr(d, le, "effort") && j->limits[2] < 0.0)
-            return fail(d, AQS_EINVAL, "%s: effort = %.17g is negative", w, j->limits[2]);
+            return fail(d, AQS_EINVAL, "%s: effort = %s is negative", w, num(j->limits[2]).s);
         if (attr(d, le, "velocity") && j->limits[3] < 0.0)
-            return fail(d, AQS_EINVAL, "%s: velocity = %.17g is negative", w, j->limits[3]);
+            return fail(d, AQS_EINVAL, "%s: velocity = %s is negative", w, num(j->limits[3]).s);
     }
     for (c = d->els[e].first; c >= 0; c = d->els[c].next) {
         const char *t = tag_of(d, c);
