@@ -46,6 +46,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
+from ._lib import URDF_ROOT_FIXED, URDF_ROOT_FREE
 from ._errors import from_status as _from_status
 
 __all__ = [
@@ -63,7 +64,7 @@ __all__ = [
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
     "BodyInertial", "JointDefinition", "load_urdf", "save_urdf", "URDFError",
-    "URDFWarning", "JointLimits",
+    "URDFWarning", "JointLimits", "URDF_ROOT_FIXED", "URDF_ROOT_FREE",
 ]
 
 __version__ = "0.1.0"
