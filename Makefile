@@ -134,7 +134,8 @@ install: lib
 	ln -sf libaqs.so.$(VERSION) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libaqs.so
 	install -m 644 $(STLIB) $(DESTDIR)$(PREFIX)/lib/libaqs.a
-	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(VERSION)|g' aqs.pc.in \
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(VERSION)|g' \
+	    -e 's|@URDF_REQUIRES@|$(if $(filter 1,$(AQS_URDF)), expat)|g' aqs.pc.in \
 	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/aqs.pc
 
 $(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
