@@ -399,7 +399,8 @@ typedef struct {
     ujoint *joints;
     int32_t nlinks, njoints;
     int32_t *hash; /* open addressing over link names: link index or -1 */
-    size_t hcap;
+    int32_t *jhash; /* the same over joint names */
+    size_t hcap, jcap;
     int32_t *parent_joint, *group, *body_of;
 } model_in;
 
@@ -421,6 +422,19 @@ static int32_t link_lookup(model_in *m, const char *name, int32_t insert)
     }
     if (insert >= 0) m->hash[i] = insert;
     return insert >= 0 ? insert : -1;
+}
+
+/* Insert joint index under its name; 0 if the name is taken. */
+static int joint_insert(model_in *m, int32_t index)
+{
+    const char *name = m->joints[index].name;
+    size_t i = (size_t)name_hash(name) & (m->jcap - 1);
+    while (m->jhash[i] >= 0) {
+        if (strcmp(m->joints[m->jhash[i]].name, name) == 0) return 0;
+        i = (i + 1) & (m->jcap - 1);
+    }
+    m->jhash[i] = index;
+    return 1;
 }
 
 static int32_t find_group(int32_t *group, int32_t a)
@@ -676,12 +690,16 @@ static aqs_status build(model_in *m, const aqs_urdf_options *o)
     m->joints = lk_calloc(L, (size_t)m->njoints + 1, sizeof *m->joints);
     for (m->hcap = 16; m->hcap < 2 * (size_t)m->nlinks;) m->hcap *= 2;
     m->hash = lk_alloc(L, m->hcap * sizeof *m->hash);
+    for (m->jcap = 16; m->jcap < 2 * (size_t)m->njoints;) m->jcap *= 2;
+    m->jhash = lk_alloc(L, m->jcap * sizeof *m->jhash);
     m->parent_joint = lk_alloc(L, (size_t)m->nlinks * sizeof(int32_t));
     m->group = lk_alloc(L, (size_t)m->nlinks * sizeof(int32_t));
     m->body_of = lk_alloc(L, (size_t)m->nlinks * sizeof(int32_t));
-    if (!m->links || !m->joints || !m->hash || !m->parent_joint || !m->group || !m->body_of)
+    if (!m->links || !m->joints || !m->hash || !m->jhash || !m->parent_joint || !m->group ||
+        !m->body_of)
         return oom(d);
     for (i = 0; i < (int32_t)m->hcap; i++) m->hash[i] = -1;
+    for (i = 0; i < (int32_t)m->jcap; i++) m->jhash[i] = -1;
     for (i = 0; i < m->nlinks; i++) m->parent_joint[i] = -1;
 
     /* Links, joints, and what is not modelled, in document order. */
@@ -712,11 +730,10 @@ static aqs_status build(model_in *m, const aqs_urdf_options *o)
         if (strcmp(tag_of(d, c), "joint") != 0) continue;
         name = attr(d, c, "name");
         if (!name || !*name) return fail(d, AQS_EINVAL, "a <joint> has no name");
-        for (i = 0; i < m->njoints; i++)
-            if (strcmp(m->joints[i].name, name) == 0) break;
-        if (i < m->njoints) return fail(d, AQS_EINVAL, "joint '%s' is defined twice", name);
-        j = &m->joints[m->njoints++];
+        j = &m->joints[m->njoints];
         j->name = name;
+        if (!joint_insert(m, m->njoints)) return fail(d, AQS_EINVAL, "joint '%s' is defined twice", name);
+        m->njoints++;
         if ((st = read_joint(m, c, j)) != AQS_OK) return st;
     }
 
@@ -912,6 +929,7 @@ static void free_doc(model_in *m)
     lk_free(L, m->links);
     lk_free(L, m->joints);
     lk_free(L, m->hash);
+    lk_free(L, m->jhash);
     lk_free(L, m->parent_joint);
     lk_free(L, m->group);
     lk_free(L, m->body_of);
