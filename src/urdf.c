@@ -764,7 +764,7 @@ static aqs_status build(model_in *m, const aqs_urdf_options *o)
     for (i = 0; i < m->nlinks; i++) m->body_of[i] = i == root;
     for (i = 0; i < m->nlinks; i++) {
         int32_t k = i, steps = 0, n;
-        while (!m->body_of[k] && m->parent_joint[k] >= 0 && steps <= m->nlinks) {
+        while (!m->body_of[k] && m->parent_joint[k] >= 0 && steps < m->nlinks) {
             m->group[steps++] = k;
             k = m->joints[m->parent_joint[k]].parent;
         }

@@ -1,52 +1,31 @@
-"""URDF in and out for aqs linkages, with Python's own xml.etree.
+"""URDF in and out for aqs linkages.
 
     L = aqs.load_urdf("robot.urdf")      # a finalized aqs.Linkage
     aqs.save_urdf(L, "copy.urdf")        # or L.save_urdf("copy.urdf")
 
-URDF (http://wiki.ros.org/urdf/XML) describes a tree of links joined by
-joints, at zero joint positions. Its conventions are aqs's own: a joint's
-<origin xyz rpy> places the joint frame in the parent link's frame, the child
-link's frame is the joint frame (moved by the joint position), the joint
-<axis> is in the joint frame. Units are SI (m, kg, rad, kg m^2); aqs takes
-them as they are. rpy = (roll, pitch, yaw) are fixed-axis rotations about x,
-then y, then z: R = Rz(yaw) Ry(pitch) Rx(roll).
-
-Joint types:
-    revolute, continuous -> aqs "revolute" (limits, dynamics, safety and
-                            calibration are ignored: aqs has no joint limits)
-    prismatic            -> "prismatic"
-    fixed                -> "fixed" (welds the child to the parent)
-    floating             -> "free" (aqs free joints hang from the world only)
-    planar               -> "planar" (URDF's axis is the plane normal, as
-                            aqs's axis a; the translation coordinates are
-                            along aqs's u and v)
-Anything else (and <mimic>, which couples joints) raises URDFError.
-
-The world: a root link without <inertial> (or with mass 0), such as the
-customary "world" link, is the fixed world (aqs.WORLD). A root link with mass
-is a body attached to the world by a joint named "world_to_<root>", joint 0:
-fixed by default (as Pinocchio's and MuJoCo's URDF readers do), or free with
-load_urdf(path, root="free").
-
-Bodies are the non-world links in document order and joints the URDF joints
-in document order; the loaded linkage carries the names as its attributes
-body_names and joint_names, which save_urdf writes back.
-
-Inertia: <inertial> holds <origin xyz rpy> (the centre of mass and the
-orientation of the inertial frame in the link frame), <mass value> and
-<inertia ixx ixy ixz iyy iyz izz> about the centre of mass in the inertial
-frame (ixy = I[0][1], the tensor entry, as in URDF). A link without
-<inertial> has no mass; aqs accepts it only when fixed joints weld it to a
-link with mass or to the world (the library's rule at finalize), and
-load_urdf says so, naming the link, before the library is asked.
+load_urdf calls the library's loader, aqs_linkage_load_urdf (src/urdf.c,
+expat): one loader for C and Python, documented in docs/urdf.md. In short:
+bodies are the links in document order (a massless root link is the world),
+joints the URDF joints in document order, preceded by joint 0
+"world_to_<root>" when the root link has mass (fixed, or free with
+root="free"); bodies and joints carry the file's names (Linkage.body_names,
+joint_names, find_body, find_joint) and <limit> is kept (joint_limits; not
+enforced by the solvers). revolute and continuous map to aqs "revolute",
+prismatic, fixed, floating to "free", planar to "planar". Inertias are
+checked where the solvers use them, on each rigid group of links welded by
+fixed joints. What the file holds and aqs does not model (mimic,
+transmissions, gazebo tags, dynamics, meshes...) is reported with
+warnings.warn(URDFWarning); every file aqs cannot load raises URDFError.
 
 save_urdf writes the model at q = 0 (URDF has no joint state): a massless
 root link "world", one link per body with its inertial (origin at the
 centre of mass, rpy 0, the body-frame inertia), one joint per joint with
-origin xyz and rpy from its quaternion, every number with %.17g. aqs
-revolute joints are written as "continuous" and prismatic ones with limits
-of +-1e300 (URDF requires limits on them); spherical, universal and
-cylindrical joints have no URDF equivalent and raise URDFError.
+origin xyz and rpy from its quaternion, every number with %.17g, names
+from the linkage (else link_<i>, joint_<j>), limits when set. aqs revolute
+joints without position limits are written as "continuous"; URDF has no
+"none", so unbounded positions are written as +-1e300 and an infinite effort
+or velocity as 0. Spherical, universal and cylindrical joints have no URDF
+equivalent and raise URDFError.
 """
 
 import ctypes
