@@ -1,16 +1,25 @@
 # aqs -- adaptive quasi-statics. See README.md.
-#   make            build/libaqs.so.X.Y.Z and build/libaqs.a
-#   make check      every test (C, C++ reference, Python, install); SANITIZE=1 under ASan/UBSan
+#   make            build/libaqs.so.X.Y.Z and build/libaqs.a (needs only a C compiler and
+#                   libccd; installs nothing)
+#   make check      every test (C, C++ reference, Python, install, ABI); SANITIZE=1 under ASan/UBSan
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
 #   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
-#   make install    PREFIX=/usr/local DESTDIR=
-#   make deps       install the Debian/PyPI packages that are missing
+#   make install    PREFIX=/usr/local LIBDIR=$(PREFIX)/lib INCLUDEDIR=$(PREFIX)/include DESTDIR=
+#   make uninstall  the same variables: removes what install put there
+#   make deps       install the Debian/PyPI packages the tests and benchmarks need
+#                   (make check, demo and bench call it; make / make lib never do)
+# Honoured from the command line or the environment: CC, CXX, CFLAGS, CXXFLAGS, CPPFLAGS,
+# LDFLAGS (appended after the project's own flags), PREFIX, LIBDIR, INCLUDEDIR, DESTDIR.
+# -Werror only when CI=true or WERROR=1 (.ci/run passes WERROR=1).
 
 SHELL := /bin/bash
 PREFIX ?= /usr/local
+LIBDIR ?= $(PREFIX)/lib
+INCLUDEDIR ?= $(PREFIX)/include
 DESTDIR ?=
 PYTHON ?= python3
+OBJCOPY ?= objcopy
 
 MAJOR := $(shell sed -n 's/^\#define AQS_VERSION_MAJOR \([0-9]*\).*/\1/p' include/aqs.h)
 MINOR := $(shell sed -n 's/^\#define AQS_VERSION_MINOR \([0-9]*\).*/\1/p' include/aqs.h)
@@ -27,15 +36,28 @@ SANFLAGS :=
 OPT := -O2 -funroll-loops -g
 endif
 
+# make's built-in default CC is cc and CXX is g++; both may be overridden.
 CC ?= cc
 CXX ?= c++
-WARN := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wno-unused-parameter
-CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden -DAQS_BUILDING_LIBRARY \
-              -Iinclude -Isrc $(SANFLAGS)
-CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
-CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra -Werror -Wno-unused-parameter -Iinclude \
+ifneq ($(filter true 1,$(CI) $(WERROR)),)
+WERROR_FLAG := -Werror
+else
+WERROR_FLAG :=
+endif
+WARN := -Wall -Wextra $(WERROR_FLAG) -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wno-unused-parameter
+# The project's flags come first, the user's CPPFLAGS / CFLAGS after them (so -O3 or -g0
+# there wins, while -std=c99 -fPIC -fvisibility=hidden stay).
+CPPFLAGS_LIB := -DAQS_BUILDING_LIBRARY -Iinclude -Isrc
+CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden $(SANFLAGS)
+CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
+CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude \
                  -I/usr/include/eigen3 $(SANFLAGS)
-LDLIBS := -lccd -lm
+# libccd through pkg-config (module ccd) when it is there, else plain -lccd.
+ifndef CCD_LIBS
+CCD_CFLAGS := $(shell pkg-config --cflags ccd 2>/dev/null)
+CCD_LIBS := $(shell pkg-config --libs ccd 2>/dev/null || echo -lccd)
+endif
+LDLIBS := $(CCD_LIBS) -lm
 
 # URDF loading (src/urdf.c) with expat, an optional feature: on when
 # pkg-config finds expat, off with AQS_URDF=0 (the load functions then return
@@ -50,7 +72,11 @@ SRCS := $(sort $(wildcard src/*.c))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
 SONAME := libaqs.so.$(MAJOR)
 SHLIB := $(BUILD)/libaqs.so.$(VERSION)
+# libaqs.a (installed): one partially linked object whose only global symbols are the
+# public aqs_ functions. libaqs_internal.a (never installed): the plain objects, for the
+# C unit tests and the bench programs, which call internal functions.
 STLIB := $(BUILD)/libaqs.a
+INTLIB := $(BUILD)/libaqs_internal.a
 
 C_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_*.c)))
 CXX_TESTS := $(patsubst tests/reference/%.cpp,$(BUILD)/tests/reference/%,$(sort $(wildcard tests/reference/test_*.cpp)))
@@ -61,7 +87,8 @@ BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols \
-        deps demo bench bench-scaling bench-plots bench-collide check-bench install clean
+        check-abi abi-baseline deps demo bench bench-scaling bench-plots bench-collide \
+        check-bench install uninstall clean
 
 all: lib
 lib: $(SHLIB) $(STLIB)
@@ -72,45 +99,86 @@ $(DEPS_STAMP): tools/deps.sh
 	@bash tools/deps.sh
 	@mkdir -p build && touch $@
 
-$(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) include/aqs.h | $(DEPS_STAMP)
+# The library needs only libccd: a missing one stops the build with one message. The
+# test tools (make deps) are installed first only when a goal needs them, so that on a
+# fresh Debian machine `make check` / `make demo` set themselves up.
+CCD_STAMP := $(BUILD)/.ccd-ok
+$(CCD_STAMP):
+	@mkdir -p $(dir $@)
+	@if printf '#include <ccd/ccd.h>\nint main(void) { ccd_t c; CCD_INIT(&c); return c.max_iterations == 0; }\n' \
+	    | $(CC) $(CPPFLAGS) $(CCD_CFLAGS) -x c - -o $(BUILD)/.ccd-probe $(LDFLAGS) $(LDLIBS) >/dev/null 2>&1; \
+	then rm -f $(BUILD)/.ccd-probe; touch $@; \
+	else echo "aqs: libccd not found (header ccd/ccd.h or -lccd): install the Debian package libccd-dev (apt-get install libccd-dev), or make its pkg-config module 'ccd' visible (PKG_CONFIG_PATH) or pass CPPFLAGS=-I... LDFLAGS=-L..." >&2; exit 1; fi
+DEPS_GOALS := check check-% demo bench bench-% peers
+ifneq ($(filter $(DEPS_GOALS),$(MAKECMDGOALS)),)
+BUILD_PREREQ := $(DEPS_STAMP) $(CCD_STAMP)
+$(CCD_STAMP): | $(DEPS_STAMP)
+else
+BUILD_PREREQ := $(CCD_STAMP)
+endif
+
+$(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) $(CFLAGS_LIB) -c $< -o $@
+	@$(CC) $(CPPFLAGS_LIB) $(CPPFLAGS) $(CCD_CFLAGS) $(CFLAGS_LIB) $(CFLAGS) -c $< -o $@
 
 $(SHLIB): $(OBJS) src/aqs.map
 	@echo "  LD      $@"
 	@$(CC) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=src/aqs.map -Wl,--no-undefined \
-	    $(SANFLAGS) -o $@ $(OBJS) $(LDLIBS)
+	    $(SANFLAGS) $(CFLAGS) $(LDFLAGS) -o $@ $(OBJS) $(LDLIBS)
 	@ln -sf libaqs.so.$(VERSION) $(BUILD)/$(SONAME)
 	@ln -sf $(SONAME) $(BUILD)/libaqs.so
 
+# Internals are compiled with -fvisibility=hidden and the public functions carry AQS_API
+# (visibility default): after one partial link, --localize-hidden turns every internal
+# global into a local symbol, so a program that defines its own vec3_dot links.
 $(STLIB): $(OBJS)
+	@echo "  AR      $@"
+	@rm -f $@ $(BUILD)/aqs_static.o
+	@$(CC) -r -nostdlib -o $(BUILD)/aqs_static.o $(OBJS)
+	@$(OBJCOPY) --localize-hidden $(BUILD)/aqs_static.o
+	@ar rcs $@ $(BUILD)/aqs_static.o
+
+$(INTLIB): $(OBJS)
 	@echo "  AR      $@"
 	@rm -f $@
 	@ar rcs $@ $(OBJS)
 
-# C unit tests link the static library so they can reach internal functions.
-$(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(STLIB)
+# C unit tests link the internal archive so they can reach internal functions.
+$(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(INTLIB) | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) $(CFLAGS_TEST) -Itests/support -o $@ $< $(TEST_SUPPORT) $(STLIB) -lcmocka $(LDLIBS)
+	@$(CC) $(CFLAGS_TEST) -Itests/support $(CPPFLAGS) $(CFLAGS) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT) \
+	    $(INTLIB) -lcmocka $(LDLIBS)
 
 $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CXX     $<"
-	@$(CXX) $(CXXFLAGS_TEST) -o $@ $< -L$(BUILD) -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
+	@$(CXX) $(CXXFLAGS_TEST) $(CPPFLAGS) $(CXXFLAGS) $(LDFLAGS) -o $@ $< -L$(BUILD) \
+	    -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-c check-reference check-python check-install check-bench
+check: check-symbols check-abi check-c check-reference check-python check-install check-bench
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
 
-check-symbols: $(SHLIB)
+# Exports of the shared library; globals of the static library (all aqs-prefixed, and a
+# program defining the internal archive's names links against it).
+check-symbols: $(SHLIB) $(STLIB) $(INTLIB)
 	@bash tests/check_symbols.sh $(SHLIB) src/aqs.map
+	@bash tests/check_static.sh $(STLIB) $(INTLIB) "$(CC)" "$(SANFLAGS)" "$(LDLIBS)"
+
+# ABI against the committed baseline of the release (docs/abi.md): removed or changed
+# functions and types fail, added functions are reported. `make abi-baseline` rewrites it.
+ABI_BASELINE := tests/abi/libaqs.abi
+check-abi: $(SHLIB)
+	@bash tests/abi/check.sh $(SHLIB) $(ABI_BASELINE)
+abi-baseline: $(SHLIB)
+	@bash tests/abi/check.sh --update $(SHLIB) $(ABI_BASELINE)
 
 check-c: $(C_TESTS)
 	@set -e; for t in $(C_TESTS); do echo "== $$t"; $$t; done
 
 check-reference: $(CXX_TESTS)
-	@set -e; for t in $(CXX_TESTS); do echo "== $$t"; AQS_VECTORS=$(abspath ../shared/vectors) $$t; done
+	@set -e; for t in $(CXX_TESTS); do echo "== $$t"; AQS_VECTORS=$(abspath tests/vectors) $$t; done
 
 ifeq ($(SANITIZE),1)
 # Python loads the library into an uninstrumented interpreter: preload the runtime.
@@ -120,35 +188,60 @@ else
 PY_ENV :=
 endif
 check-python: $(SHLIB) $(BUILD)/bench/urdf_export
-	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath ../shared/vectors) \
+	cd tests/python && $(PY_ENV) AQS_LIBRARY=$(abspath $(SHLIB)) AQS_VECTORS=$(abspath tests/vectors) \
 	    AQS_URDF_EXPORT=$(abspath $(BUILD)/bench/urdf_export) \
 	    PYTHONPATH=$(abspath bindings/python) $(PYTHON) -m pytest -q -p no:cacheprovider .
 
 check-install: lib
 	@bash tests/install/run.sh "$(BUILD)" "$(CC)" "$(CXX)" "$(SANFLAGS)"
 
+# aqs.pc and the CMake package locate the files relative to themselves (pkg-config's
+# ${prefix}, CMake's CMAKE_CURRENT_LIST_DIR), so a DESTDIR tree can be moved.
+PC_LIBDIR = $(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))
+PC_INCLUDEDIR = $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
+CMAKEDIR = $(LIBDIR)/cmake/aqs
+CMAKE_REL_LIBDIR = $(shell realpath -m --relative-to=$(CMAKEDIR) $(LIBDIR))
+CMAKE_REL_INCLUDEDIR = $(shell realpath -m --relative-to=$(CMAKEDIR) $(INCLUDEDIR))
+SIZEOF_VOID_P = $(shell printf '__SIZEOF_POINTER__\n' | $(CC) $(CPPFLAGS) $(CFLAGS) -E -P -x c - | tr -d ' \n')
 install: lib
-	install -d $(DESTDIR)$(PREFIX)/include $(DESTDIR)$(PREFIX)/lib/pkgconfig
-	install -m 644 include/aqs.h $(DESTDIR)$(PREFIX)/include/aqs.h
-	install -m 755 $(SHLIB) $(DESTDIR)$(PREFIX)/lib/libaqs.so.$(VERSION)
-	ln -sf libaqs.so.$(VERSION) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
-	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libaqs.so
-	install -m 644 $(STLIB) $(DESTDIR)$(PREFIX)/lib/libaqs.a
-	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(VERSION)|g' \
+	install -d $(DESTDIR)$(INCLUDEDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(CMAKEDIR)
+	install -m 644 include/aqs.h $(DESTDIR)$(INCLUDEDIR)/aqs.h
+	install -m 755 $(SHLIB) $(DESTDIR)$(LIBDIR)/libaqs.so.$(VERSION)
+	ln -sf libaqs.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libaqs.so
+	install -m 644 $(STLIB) $(DESTDIR)$(LIBDIR)/libaqs.a
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
+	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' \
 	    -e 's|@URDF_REQUIRES@|$(if $(filter 1,$(AQS_URDF)), expat)|g' aqs.pc.in \
-	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/aqs.pc
+	    > $(DESTDIR)$(LIBDIR)/pkgconfig/aqs.pc
+	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
+	    -e 's|@REL_LIBDIR@|$(CMAKE_REL_LIBDIR)|g' -e 's|@REL_INCLUDEDIR@|$(CMAKE_REL_INCLUDEDIR)|g' \
+	    -e 's|@URDF_LIBS@|$(if $(filter 1,$(AQS_URDF)),;expat)|g' \
+	    cmake/aqsConfig.cmake.in > $(DESTDIR)$(CMAKEDIR)/aqsConfig.cmake
+	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@MAJOR@|$(MAJOR)|g' -e 's|@SIZEOF_VOID_P@|$(SIZEOF_VOID_P)|g' \
+	    cmake/aqsConfigVersion.cmake.in > $(DESTDIR)$(CMAKEDIR)/aqsConfigVersion.cmake
 
-$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
+# The same PREFIX / LIBDIR / INCLUDEDIR / DESTDIR as the install; builds nothing.
+uninstall:
+	rm -f $(DESTDIR)$(INCLUDEDIR)/aqs.h $(DESTDIR)$(LIBDIR)/libaqs.so.$(VERSION) \
+	    $(DESTDIR)$(LIBDIR)/$(SONAME) $(DESTDIR)$(LIBDIR)/libaqs.so $(DESTDIR)$(LIBDIR)/libaqs.a \
+	    $(DESTDIR)$(LIBDIR)/pkgconfig/aqs.pc $(DESTDIR)$(CMAKEDIR)/aqsConfig.cmake \
+	    $(DESTDIR)$(CMAKEDIR)/aqsConfigVersion.cmake
+	-@rmdir $(DESTDIR)$(CMAKEDIR) 2>/dev/null || true
+
+$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(INTLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) -std=c99 -O2 -g $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+	@$(CC) -std=c99 -O2 -g $(WARN) $(SANFLAGS) -Iinclude -Ibench $(CPPFLAGS) $(CFLAGS) $(LDFLAGS) \
+	    -o $@ $< $(BENCH_SUPPORT) $(INTLIB) $(LDLIBS)
 
 # The URDF exporter runs in check-python (tests/python/test_urdf_bench.py), so it is
 # built like the tests, under the sanitizers with SANITIZE=1.
-$(BUILD)/bench/urdf_export: bench/urdf_export.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(STLIB)
+$(BUILD)/bench/urdf_export: bench/urdf_export.c $(wildcard bench/*.h) $(BENCH_SUPPORT) $(INTLIB)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) -std=c99 $(OPT) $(WARN) $(SANFLAGS) -Iinclude -Ibench -o $@ $< $(BENCH_SUPPORT) $(STLIB) $(LDLIBS)
+	@$(CC) -std=c99 $(OPT) $(WARN) $(SANFLAGS) -Iinclude -Ibench $(CPPFLAGS) $(CFLAGS) $(LDFLAGS) \
+	    -o $@ $< $(BENCH_SUPPORT) $(INTLIB) $(LDLIBS)
 
 # Pinocchio and MuJoCo side by side with aqs (bench/peers.py; results in docs/bench.md,
 # section "Peers"). Installs the optional peers (pin, mujoco from PyPI) first.

@@ -28,6 +28,13 @@ if echo "$exported" | grep -v '^aqs_' >/dev/null; then
     echo "check_symbols: exported symbols without the aqs_ prefix"
     fail=1
 fi
+# Not only the dynamic table: no global symbol of the library's own symbol table lacks
+# the prefix either (the static library is checked by tests/check_static.sh).
+unprefixed=$(nm -g --defined-only "$lib" | awk 'NF == 3 && $3 !~ /^aqs/ {print $3}')
+if [ -n "$unprefixed" ]; then
+    echo "check_symbols: global symbols without the aqs prefix in $lib:" $unprefixed
+    fail=1
+fi
 soname=$(objdump -p "$lib" | awk '/SONAME/ {print $2}')
 major=$(sed -n 's/^#define AQS_VERSION_MAJOR \([0-9]*\).*/\1/p' include/aqs.h)
 if [ "$soname" != "libaqs.so.$major" ]; then

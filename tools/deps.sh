@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install what is missing of the project's dependencies (Debian packages, PyPI).
-#   tools/deps.sh           what make check needs
+#   tools/deps.sh           what make check needs (make deps; make check and make demo
+#                           call it, make / make lib never do)
 #   tools/deps.sh bench     also the benchmark plots' dependency, matplotlib
 #                           (`make bench-plots` / `make bench` call it so)
 #   tools/deps.sh --peers   also the optional peers of bench/peers.py (make peers):
@@ -8,7 +9,9 @@
 set -euo pipefail
 peers=0
 [ "${1:-}" = "--peers" ] && peers=1
-pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config libexpat1-dev)
+# cmake: the CMake consumer of tests/install/run.sh; abigail-tools: abidw/abidiff of
+# tests/abi/check.sh; libexpat1-dev: URDF loading (optional for the library, tested).
+pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config cmake abigail-tools libexpat1-dev)
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
@@ -18,6 +21,8 @@ command -v make >/dev/null || missing+=(make)
 # A fresh Debian machine may have no Python at all: take Debian's, with pip.
 PY=${PYTHON:-python3}
 command -v "$PY" >/dev/null || missing+=(python3 python3-pip)
+# tests/python/test_install.py installs the package into a fresh venv (Debian: python3-venv).
+command -v "$PY" >/dev/null && ! $PY -c "import venv, ensurepip" 2>/dev/null && missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "deps: installing ${missing[*]}"
     SUDO=""

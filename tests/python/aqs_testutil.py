@@ -2,8 +2,8 @@
 linkage from a case, and an independent dense numpy solver (MATH.md section 2) that knows
 nothing of aqs.
 
-A "case" is a dict in the format of vectors/exact/*.json (see
-vectors/README.md): bodies, joints, positions, gravity, body_forces,
+A "case" is a dict in the format of tests/vectors/exact/*.json (see
+tests/vectors/README.md): bodies, joints, positions, gravity, body_forces,
 joint_forces and optionally expected.
 """
 
@@ -18,9 +18,8 @@ REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 
 
 def vectors_dir():
-    """$AQS_VECTORS, else the shared vectors next to the checkout."""
-    return os.environ.get("AQS_VECTORS") or os.path.normpath(
-        os.path.join(REPO, "..", "shared", "vectors"))
+    """$AQS_VECTORS, else the repository's own tests/vectors."""
+    return os.environ.get("AQS_VECTORS") or os.path.join(REPO, "tests", "vectors")
 
 
 def exact_vector_files():

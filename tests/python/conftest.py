@@ -1,7 +1,7 @@
 """pytest configuration of the aqs bindings suite.
 
 Run (what `make check-python` does):
-    cd tests/python && AQS_LIBRARY=/abs/build/libaqs.so.X.Y.Z AQS_VECTORS=/abs/vectors \
+    cd tests/python && AQS_LIBRARY=/abs/build/libaqs.so.X.Y.Z AQS_VECTORS=/abs/tests/vectors \
         PYTHONPATH=/abs/bindings/python python3 -m pytest -q -p no:cacheprovider .
 """
 

@@ -290,7 +290,7 @@ def test_fixed_size_arrays_checked_before_c():
             L.set_body_force(0, (1, 0, 0), point=[1])
         with pytest.raises(aqs.SizeError, match="torque"):
             L.set_body_force(0, (1, 0, 0), torque=np.zeros(6))
-        with pytest.raises(aqs.InvalidArgument, match="com"):
+        with pytest.raises(TypeError, match="com"):
             L.add_body(1.0, ("a", 0, 0), EYE)
         assert (L.num_bodies, L.num_joints) == (1, 0)
 

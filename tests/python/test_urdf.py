@@ -671,10 +671,12 @@ def test_names_in_python():
             L.body_names = ["a", "b"]
         with pytest.raises(aqs.InvalidArgument, match="name is empty"):
             L.set_body_name(0, "")
-        with pytest.raises(aqs.InvalidArgument, match="is not a str"):
+        with pytest.raises(TypeError, match="name must be a str"):
             L.set_body_name(0, 3)
-        with pytest.raises(aqs.InvalidArgument, match="lower = '0' is not a number"):
+        with pytest.raises(TypeError, match="lower must be a real number"):
             L.set_joint_limits(0, lower="0")
+        with pytest.raises(TypeError, match="collision"):
+            aqs.load_urdf("x.urdf", collision="yes")
         L.set_joint_limits(0, -1, 1)
         assert L.joint_limits(0) == (-1.0, 1.0, math.inf, math.inf)
 

@@ -1,9 +1,9 @@
-// test_vectors.cpp -- the shared exact test vectors ($AQS_VECTORS/exact/*.json) against the
-// library (through the C API) and against the dense reference of dense_reference.hpp.
+// test_vectors.cpp -- the exact test vectors ($AQS_VECTORS/exact/*.json; make check points
+// AQS_VECTORS at tests/vectors) against the library (through the C API) and against the dense reference of dense_reference.hpp.
 //
 // For every vector:
 //   * library vs expected: relative 2-norm error over the whole vector <= 1e-8 for the
-//     accelerations and for the constraint forces (the contract of vectors/README.md);
+//     accelerations and for the constraint forces (the contract of tests/vectors/README.md);
 //   * reference vs expected: the same bound (validates dense_reference.hpp itself; the
 //     measured agreement is ~1e-14);
 //   * library world poses vs the reference's forward kinematics (1e-12, scaled).

@@ -11,27 +11,61 @@ first ([omega; v] for motion, [n; f] for force); quaternions are (w, x, y, z);
 bodies and joints are int indices in the order they were added; aqs.WORLD (-1)
 is the fixed world.
 
-    import aqs
-    with aqs.Linkage() as L:
-        b = L.add_body(1.0, com=(0.5, 0, 0), inertia=[0.01, 0.01, 0.01])
-        L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
-        L.finalize()
-        L.set_gravity((0, -9.81, 0))
-        stats = L.solve()                 # exact by default
-        print(L.accelerations(), stats.computed_joints)
-        L.set_tolerance("rel_joint", 1e-6)  # error-bounded adaptive solving
-        print(L.solve().error_bound)
+>>> import numpy as np
+>>> import aqs
+>>> with aqs.Linkage() as L:                 # a 2 kg rod on a revolute joint about z
+...     b = L.add_body(2.0, com=(0.5, 0, 0), inertia=np.diag([0.01, 0.1, 0.1]))
+...     j = L.add_joint("revolute", aqs.WORLD, b, axis=(0, 0, 1))
+...     L.finalize()
+...     L.set_gravity((0, -9.81, 0))
+...     stats = L.solve()                    # exact by default
+...     print(L.accelerations().round(4), stats.computed_joints)
+...     L.set_tolerance("rel_joint", 1e-6)   # error-bounded adaptive solving
+...     print(L.solve().error_bound)
+[-16.35] 1
+0.0
 
-The shared library is found through AQS_LIBRARY (a path), then a libaqs.so*
-inside this package, then the source checkout's build/, then the system
-(ctypes.util.find_library).
+Arguments are taken strictly: arrays must hold real numbers (int or float,
+any numpy integer or float dtype; converted to float64, not copied when they
+already are float64 C-contiguous) in exactly the documented shape, numbers
+are int, float or numpy scalars, indices are ints. Anything else raises
+TypeError (wrong type: a string, a bool where a number is expected, complex)
+or aqs.SizeError (wrong shape), naming the argument, before any C call:
+
+>>> with aqs.Linkage() as L:
+...     L.add_body(1.0, com=(0.5, 0), inertia=np.eye(3))
+Traceback (most recent call last):
+...
+aqs.SizeError: aqs_body_add: com has shape (2,), expected (3,) [AQS_ESIZE]
+>>> with aqs.Linkage() as L:
+...     L.add_body("1.0", com=(0.5, 0, 0), inertia=np.eye(3))
+Traceback (most recent call last):
+...
+TypeError: aqs_body_add: mass must be a real number (int, float or numpy scalar), got '1.0' (str)
+
+Bulk getters take an optional out= array, filled in place: it must be a
+writable C-contiguous float64 numpy array of exactly the result's shape.
+
+Threads: every Linkage method holds that linkage's lock (see Linkage), and
+the C calls run without the GIL.
+
+The shared library is found, in order, through: AQS_LIBRARY (a path, or a
+file name such as libaqs.so.0 that the dynamic loader looks up in the system
+paths), the libaqs.so.* installed inside this package (a wheel or
+`pip install ./bindings/python` builds one from the C sources), the source
+checkout's build/ (when this package is the checkout's bindings/python),
+and the system (ctypes.util.find_library("aqs")); aqs.library_path says
+which was loaded.
 """
 
 import collections
 import ctypes
 import dataclasses
+import functools
 import math
+import numbers
 import operator
+import threading
 
 import numpy as np
 
@@ -168,28 +202,61 @@ def version_number():
 
 def status_string(status):
     """The library's fixed text for a status code (aqs_status_string)."""
-    return _c.aqs_status_string(status).decode()
+    return _c.aqs_status_string(_index(status, "aqs_status_string", "status")).decode()
 
 
 # ---------------------------------------------------------------------------
-# Argument conversion: only what ctypes needs to call C safely. Values are
-# checked by the C library; sizes that C cannot see (fixed-length arrays such
-# as com[3]) are checked here, because C would read past the end.
+# Argument conversion: only what ctypes needs to call C safely, and strictly.
+# Values are checked by the C library; what C cannot see is checked here: the
+# type of every argument (no string, bool or complex is turned into a number)
+# and the shape of every array (C would read past the end of a short com[3]).
 # ---------------------------------------------------------------------------
 
-def _array(values, function, name, size=None):
-    """values as a float64 C-contiguous array; the same object when it already is one."""
+_REAL_KINDS = "iuf"  # numpy dtype kinds taken as real numbers: signed, unsigned, float
+_BOOLS = (bool, np.bool_)
+
+
+def _shape_text(shape):
+    return "(%s)" % ", ".join("n" if d < 0 else str(d) for d in shape) if len(shape) != 1 \
+        else "(%s,)" % ("n" if shape[0] < 0 else shape[0])
+
+
+def _shape_fits(shape, pattern):
+    return len(shape) == len(pattern) and all(p < 0 or p == d for d, p in zip(shape, pattern))
+
+
+def _array(values, function, name, shapes=((-1,),)):
+    """values as a float64 C-contiguous array: the same object when it already
+    is one, else a converted copy of the same values.
+
+    values must hold real numbers (a numpy array of an integer or float
+    dtype, or nested sequences of int/float): TypeError otherwise (strings,
+    bools, complex numbers, None, objects). Its shape must be one of shapes
+    (-1: any length in that dimension): SizeError otherwise. An int n stands
+    for the shape (n,).
+    """
+    if isinstance(shapes, int):
+        shapes = ((shapes,),)
+    if isinstance(values, (str, bytes)):
+        raise TypeError("%s: %s must be an array of real numbers, got the string %r"
+                        % (function, name, values))
     try:
-        array = np.ascontiguousarray(values, dtype=_F64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidArgument("%s: %s is not an array of numbers (%s)" % (function, name, exc))
-    if size is not None and array.size != size:
-        raise SizeError("%s: %s has %d values, expected %d" % (function, name, array.size, size))
-    return array
+        array = np.asarray(values)
+    except (TypeError, ValueError) as exc:  # ragged nested sequences, odd objects
+        raise SizeError("%s: %s is not a rectangular array of numbers (%s)"
+                        % (function, name, exc)) from None
+    if array.dtype.kind not in _REAL_KINDS:
+        raise TypeError("%s: %s must be an array of real numbers (int or float), got dtype %s"
+                        % (function, name, array.dtype))
+    if not any(_shape_fits(array.shape, shape) for shape in shapes):
+        raise SizeError("%s: %s has shape %s, expected %s"
+                        % (function, name, _shape_text(array.shape),
+                           " or ".join(_shape_text(shape) for shape in shapes)))
+    return np.ascontiguousarray(array, dtype=_F64)
 
 
-def _array_or_null(values, function, name, size):
-    return None if values is None else _array(values, function, name, size)
+def _array_or_null(values, function, name, shapes=((-1,),)):
+    return None if values is None else _array(values, function, name, shapes)
 
 
 def _nonempty(array):
@@ -197,23 +264,65 @@ def _nonempty(array):
     return array if array.size else None
 
 
-def _index(value, function, name):
+def _number(value, function, name):
+    """value as a float: an int, a float, a numpy integer or float scalar (or a
+    0-d array of one). TypeError for anything else -- strings ("0.1"), bools,
+    complex numbers, None -- rather than a silent conversion."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in _REAL_KINDS:
+        value = value[()]
+    if isinstance(value, _BOOLS) or not isinstance(value, numbers.Real):
+        raise TypeError("%s: %s must be a real number (int, float or numpy scalar), got %r (%s)"
+                        % (function, name, value, type(value).__name__))
     try:
+        return float(value)
+    except OverflowError:
+        raise InvalidArgument("%s: %s = %r does not fit in a double" % (function, name, value)) \
+            from None
+
+
+def _index(value, function, name, low=_INT32_MIN, high=_INT32_MAX, ctype="int32_t"):
+    """value as an int (int or numpy integer; not a bool, float or string)."""
+    try:
+        if isinstance(value, _BOOLS):
+            raise TypeError
         index = operator.index(value)
     except TypeError:
-        raise TypeError("%s: %s must be an integer, got %r" % (function, name, value)) from None
-    if not _INT32_MIN <= index <= _INT32_MAX:
-        raise RangeError("%s: %s = %d does not fit in int32_t" % (function, name, index))
+        raise TypeError("%s: %s must be an integer, got %r (%s)"
+                        % (function, name, value, type(value).__name__)) from None
+    if not low <= index <= high:
+        raise RangeError("%s: %s = %d does not fit in %s" % (function, name, index, ctype))
     return index
 
 
+def _flag(value, function, name):
+    """value as C's 0 or 1: True/False (also numpy's), or the integers 0 and 1."""
+    if isinstance(value, _BOOLS):
+        return 1 if value else 0
+    flag = _index(value, function, name)
+    if flag not in (0, 1):
+        raise InvalidArgument("%s: %s = %d is not a boolean (True/False or 1/0)"
+                              % (function, name, flag))
+    return flag
+
+
 def _output(out, shape, function):
-    """A fresh array to be filled by C, or the caller's out (float64, C-contiguous, writable)."""
+    """A fresh array to be filled by C, or the caller's out, which must be a
+    writable C-contiguous float64 numpy array of exactly that shape (TypeError,
+    SizeError otherwise: never a silent copy or another layout)."""
+    shape = (shape,) if isinstance(shape, int) else tuple(shape)
     if out is None:
         return np.empty(shape, dtype=_F64)
-    if not (isinstance(out, np.ndarray) and out.dtype == _F64 and out.flags.c_contiguous
-            and out.flags.writeable):
-        raise TypeError("%s: out must be a writable C-contiguous float64 numpy array" % function)
+    if not isinstance(out, np.ndarray):
+        raise TypeError("%s: out must be a numpy array, got %s" % (function, type(out).__name__))
+    if out.dtype != _F64:
+        raise TypeError("%s: out must have dtype float64, got %s" % (function, out.dtype))
+    if not out.flags.c_contiguous:
+        raise TypeError("%s: out must be C-contiguous" % function)
+    if not out.flags.writeable:
+        raise TypeError("%s: out must be writable" % function)
+    if out.shape != shape:
+        raise SizeError("%s: out has shape %s, expected %s"
+                        % (function, _shape_text(out.shape), _shape_text(shape)))
     return out
 
 
@@ -247,10 +356,36 @@ class Linkage:
     releases the handle (also on `with` exit and on garbage collection);
     closing twice is fine; any other call on a closed linkage raises
     StateError.
+
+    Threads: each Linkage has its own lock (a threading.RLock) that every
+    method holds while it runs, close() included, so calls from several
+    threads on one linkage run one after the other (a close() during another
+    thread's step() waits for the step to finish), and calls on different
+    linkages run in parallel: the C calls release the GIL. A Linkage cannot
+    be copied or pickled (TypeError): it owns its C handle.
+
+    >>> import numpy as np
+    >>> L = Linkage()
+    >>> b = L.add_body(2.0, com=(0.5, 0, 0), inertia=np.diag([0.01, 0.1, 0.1]))
+    >>> L.add_joint("revolute", WORLD, b, axis=(0, 0, 1))
+    0
+    >>> L.finalize()
+    >>> L.set_gravity((0, -9.81, 0))
+    >>> L.solve().computed_joints
+    1
+    >>> round(float(L.accelerations()[0]), 4)   # -9.81 * 0.5 * 2 / (0.1 + 2 * 0.5**2)
+    -16.35
+    >>> L.close()
+    >>> L.solve()
+    Traceback (most recent call last):
+    ...
+    aqs.StateError: aqs_linkage_solve: the linkage is closed [AQS_ESTATE]
     """
 
     def __init__(self):
         """Create an empty linkage using malloc/free (aqs_linkage_create)."""
+        self._lock = threading.RLock()
+        self._in_c = False
         self._handle = None
         self._callbacks = None
         handle = _lib.linkage_p()
@@ -266,9 +401,13 @@ class Linkage:
 
         alloc(size) returns the address (int) of size bytes aligned for any C
         type, or 0/None on failure; free(address) releases it. Both are kept
-        alive as long as the linkage.
+        alive as long as the linkage. They run in the thread that called the
+        method and must not call this linkage's methods (those raise
+        StateError there, so alloc reports a failed allocation).
         """
         self = cls.__new__(cls)
+        self._lock = threading.RLock()
+        self._in_c = False
         self._handle = None
 
         def c_alloc(user, size):
@@ -293,11 +432,18 @@ class Linkage:
     # -- lifetime ------------------------------------------------------------
 
     def close(self):
-        """Destroy the linkage and release its memory (aqs_linkage_destroy). Idempotent."""
-        handle, self._handle = self._handle, None
-        if handle is not None:
-            _c.aqs_linkage_destroy(handle)
-        self._callbacks = None  # only after destroy, which may still call free
+        """Destroy the linkage and release its memory (aqs_linkage_destroy).
+        Idempotent; waits for a call running in another thread to finish."""
+        with self._lock:
+            if self._handle is None:
+                return
+            handle = self._enter("aqs_linkage_destroy")
+            self._handle = None
+            try:
+                _c.aqs_linkage_destroy(handle)
+            finally:
+                self._in_c = False
+                self._callbacks = None  # only after destroy, which may still call free
 
     def __enter__(self):
         return self
@@ -308,6 +454,10 @@ class Linkage:
     def __del__(self):
         if getattr(self, "_handle", None) is not None and _c is not None:
             self.close()
+
+    def __reduce__(self):
+        # copy.copy would share the C handle (destroyed twice); pickle cannot carry it.
+        raise TypeError("an aqs.Linkage owns a C handle: it cannot be copied or pickled")
 
     @property
     def closed(self):
@@ -322,25 +472,43 @@ class Linkage:
 
     # -- plumbing --------------------------------------------------------------
 
-    def _h(self, function):
+    def _enter(self, function):
+        """The handle, for a C call about to be made with self._lock held;
+        sets self._in_c, which the caller clears once the call returned.
+        StateError on a closed linkage, and for a call made from inside
+        another C call on this linkage (an allocator callback)."""
         handle = self._handle
         if handle is None:
             raise StateError("%s: the linkage is closed" % function)
+        if self._in_c:
+            raise StateError("%s: called from inside a C call on the same linkage (an "
+                             "allocator callback may not use its linkage)" % function)
+        self._in_c = True
         return handle
 
     def _call(self, function, *args):
-        """Call the C function named function with the handle first; raise on failure."""
-        handle = self._h(function)
-        status = getattr(_c, function)(handle, *args)
+        """Call the C function named function with the handle first, holding the
+        lock; raise the status's exception on failure."""
+        with self._lock:
+            handle = self._enter(function)
+            try:
+                status = getattr(_c, function)(handle, *args)
+                if status != OK:
+                    message = _c.aqs_linkage_last_error(handle).decode(errors="replace")
+            finally:
+                self._in_c = False
         if status != OK:
-            message = _c.aqs_linkage_last_error(handle).decode(errors="replace")
             raise _from_status(status, message or "%s: %s" % (function, status_string(status)))
 
     @property
     def last_error(self):
         """Message of the last failed C call on this linkage ("" if none)."""
-        return _c.aqs_linkage_last_error(self._h("aqs_linkage_last_error")).decode(
-            errors="replace")
+        with self._lock:
+            handle = self._enter("aqs_linkage_last_error")
+            try:
+                return _c.aqs_linkage_last_error(handle).decode(errors="replace")
+            finally:
+                self._in_c = False
 
     # -- building --------------------------------------------------------------
 
@@ -357,7 +525,8 @@ class Linkage:
         moments obeying I1 + I2 >= I3): True (the default) or False (any
         symmetric positive definite inertia, e.g. synthetic test models).
         Building phase only (aqs_linkage_set_inertia_check)."""
-        self._call("aqs_linkage_set_inertia_check", 1 if physical else 0)
+        f = "aqs_linkage_set_inertia_check"
+        self._call(f, _flag(physical, f, "physical"))
 
     def add_body(self, mass, com, inertia):
         """Add a rigid body; returns its index (aqs_body_add).
@@ -368,10 +537,11 @@ class Linkage:
         kg m^2, symmetric positive definite.
         """
         f = "aqs_body_add"
+        mass = _number(mass, f, "mass")
         com = _array(com, f, "com", 3)
-        inertia = _array(inertia, f, "inertia", 9)
+        inertia = _array(inertia, f, "inertia", ((3, 3), (9,)))
         out = ctypes.c_int32()
-        self._call(f, float(mass), com, inertia, ctypes.byref(out))
+        self._call(f, mass, com, inertia, ctypes.byref(out))
         return out.value
 
     def add_joint(self, kind, parent, child, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0),
@@ -481,7 +651,8 @@ class Linkage:
     @staticmethod
     def _name_bytes(name, function):
         if not isinstance(name, str):
-            raise InvalidArgument("%s: name = %r is not a str" % (function, name))
+            raise TypeError("%s: name must be a str, got %r (%s)"
+                            % (function, name, type(name).__name__))
         data = name.encode("utf-8")
         if b"\0" in data:
             raise InvalidArgument("%s: name = %r contains a NUL character" % (function, name))
@@ -559,12 +730,9 @@ class Linkage:
         solvers: quasi-statics moves past them. lower <= upper (m or rad),
         effort, velocity >= 0; infinities mean none."""
         f = "aqs_joint_set_limits"
-        values = []
-        for label, v in (("lower", lower), ("upper", upper), ("effort", effort),
-                         ("velocity", velocity)):
-            if isinstance(v, (str, bytes)) or not isinstance(v, (int, float, np.number)):
-                raise InvalidArgument("%s: %s = %r is not a number" % (f, label, v))
-            values.append(float(v))
+        values = [_number(v, f, label) for label, v in
+                  (("lower", lower), ("upper", upper), ("effort", effort),
+                   ("velocity", velocity))]
         self._call(f, _index(joint, f, "joint"), *values)
 
     def joint_limits(self, joint):
@@ -620,7 +788,7 @@ class Linkage:
         (aqs_joint_set_force)."""
         f = "aqs_joint_set_force"
         joint = _index(joint, f, "joint")
-        tau = _array(tau, f, "tau")
+        tau = _array(tau, f, "tau", ((), (-1,)))
         self._call(f, joint, _nonempty(tau), tau.size)
 
     # -- solving and stepping ------------------------------------------------------
@@ -641,7 +809,8 @@ class Linkage:
         (aqs_linkage_step); returns the SolveStats of that solve (whose
         nodes_updated counts both of the step's coefficient updates).
         dt: s, > 0. Accelerations read afterwards are those of this step's solve."""
-        self._call("aqs_linkage_step", float(dt))
+        f = "aqs_linkage_step"
+        self._call(f, _number(dt, f, "dt"))
         return self.stats()
 
     # -- error-bounded adaptive solving ----------------------------------------------
@@ -660,7 +829,7 @@ class Linkage:
         number for the relative ones. 0 (the default) means exact.
         """
         f = "aqs_linkage_set_tolerance"
-        self._call(f, _named(metric, METRICS, f, "metric"), float(eps))
+        self._call(f, _named(metric, METRICS, f, "metric"), _number(eps, f, "eps"))
 
     def set_max_computed(self, max_joints):
         """Anytime control: stop a solve once max_joints joint accelerations are
@@ -678,7 +847,7 @@ class Linkage:
         after is adaptive again. 0, the default, turns it off. Inactive with
         a cap or eps = 0. Any phase."""
         f = "aqs_linkage_set_exact_fallback"
-        self._call(f, float(fraction))
+        self._call(f, _number(fraction, f, "fraction"))
 
     @property
     def exact_fallback(self):
@@ -698,7 +867,7 @@ class Linkage:
         computes more joints. margin 0 turns it off, otherwise >= 1; default
         aqs.PREDICTION_MARGIN (1024). Unused with eps = 0 or a cap."""
         f = "aqs_linkage_set_prediction"
-        self._call(f, float(margin))
+        self._call(f, _number(margin, f, "margin"))
 
     @property
     def prediction(self):
@@ -742,7 +911,7 @@ class Linkage:
         (StateError otherwise). eps >= the bound
         already reached does nothing; the max_computed cap still applies."""
         f = "aqs_linkage_refine"
-        self._call(f, float(eps))
+        self._call(f, _number(eps, f, "eps"))
         return self.stats()
 
     def stats(self):
@@ -790,7 +959,7 @@ class Linkage:
         """Set the position of one joint, (its nq) (aqs_joint_set_position)."""
         f = "aqs_joint_set_position"
         joint = _index(joint, f, "joint")
-        q = _array(q, f, "q")
+        q = _array(q, f, "q", ((), (-1,)))
         self._call(f, joint, q, q.size)
 
     def accelerations(self, out=None):
@@ -858,10 +1027,8 @@ class Linkage:
         shape frame in the body frame."""
         f = "aqs_shape_add"
         kind = _named(kind, SHAPES, f, "type")
-        size = np.ascontiguousarray(size, dtype=_F64).ravel()
-        if size.size > 3:
-            raise SizeError("%s: size has %d values, at most 3" % (f, size.size))
-        size = _array(np.concatenate([size, np.zeros(3 - size.size)]), f, "size", 3)
+        size = _array(size, f, "size", ((), (1,), (2,), (3,))).ravel()
+        size = np.concatenate([size, np.zeros(3 - size.size)])
         out = ctypes.c_int32()
         self._call(f, _index(body, f, "body"), kind, size, _array(pos, f, "pos", 3),
                    _array(quat, f, "quat", 4), ctypes.byref(out))
@@ -871,9 +1038,7 @@ class Linkage:
         """Attach the convex hull of points ((n, 3), n >= 4, not coplanar) to
         body; returns its shape index (aqs_shape_add_hull)."""
         f = "aqs_shape_add_hull"
-        points = _array(points, f, "points")
-        if points.size % 3:
-            raise SizeError("%s: points has %d values, not a multiple of 3" % (f, points.size))
+        points = _array(points, f, "points", ((-1, 3),))
         out = ctypes.c_int32()
         self._call(f, _index(body, f, "body"), points, points.size // 3,
                    _array(pos, f, "pos", 3), _array(quat, f, "quat", 4), ctypes.byref(out))
@@ -891,10 +1056,10 @@ class Linkage:
         may touch only if group_a & mask_b and group_b & mask_a are both non-zero
         (aqs_body_set_collision_filter). Defaults: group 1, mask 0xFFFFFFFF."""
         f = "aqs_body_set_collision_filter"
-        for name, value in (("group", group), ("mask", mask)):
-            if not 0 <= operator.index(value) <= 0xFFFFFFFF:
-                raise RangeError("%s: %s = %d does not fit in uint32_t" % (f, name, value))
-        self._call(f, _index(body, f, "body"), group, mask)
+        body = _index(body, f, "body")
+        group = _index(group, f, "group", 0, 0xFFFFFFFF, "uint32_t")
+        mask = _index(mask, f, "mask", 0, 0xFFFFFFFF, "uint32_t")
+        self._call(f, body, group, mask)
 
     def exclude_collision(self, body_a, body_b):
         """Never report contacts between body_a and body_b (either may be aqs.WORLD)
@@ -905,7 +1070,8 @@ class Linkage:
     def set_collide_joined(self, enabled):
         """Whether bodies joined by a joint may collide (default False)
         (aqs_linkage_set_collide_joined)."""
-        self._call("aqs_linkage_set_collide_joined", 1 if enabled else 0)
+        f = "aqs_linkage_set_collide_joined"
+        self._call(f, _flag(enabled, f, "enabled"))
 
     def collide(self, mode="lazy"):
         """All contacts at the current positions (aqs_linkage_collide), as a numpy
@@ -919,13 +1085,13 @@ class Linkage:
         capacity = 64
         while True:
             buffer = (_lib.aqs_contact * capacity)()
-            handle = self._h(f)
-            status = _c.aqs_linkage_collide(handle, mode, buffer, capacity, ctypes.byref(count))
-            if status == ESIZE and count.value > capacity:
+            try:
+                self._call(f, mode, buffer, capacity, ctypes.byref(count))
+            except SizeError:
+                if count.value <= capacity:
+                    raise
                 capacity = count.value  # sized from the returned total, then asked again
                 continue
-            if status != OK:
-                raise _from_status(status, _c.aqs_linkage_last_error(handle).decode(errors="replace"))
             break
         return np.frombuffer(buffer, dtype=CONTACT_DTYPE, count=count.value).copy()
 
@@ -939,12 +1105,41 @@ class Linkage:
         """Penalty contact (aqs_linkage_set_contact_stiffness): each contact pushes
         its bodies apart with stiffness * depth along its normal, at every solve
         and step; 0 (the default) turns it off. After finalize."""
-        self._call("aqs_linkage_set_contact_stiffness", float(stiffness))
+        f = "aqs_linkage_set_contact_stiffness"
+        self._call(f, _number(stiffness, f, "stiffness"))
 
     def collision_stats(self):
         """Work of the last collision query (aqs_linkage_get_collision_stats)."""
         values = [ctypes.c_int32() for _ in range(4)]
         self._call("aqs_linkage_get_collision_stats", *[ctypes.byref(v) for v in values])
         return CollisionStats(*(v.value for v in values))
+
+def _locked(function):
+    """function, run with its linkage's lock held."""
+    @functools.wraps(function)
+    def locked(self, *args, **kwargs):
+        with self._lock:
+            return function(self, *args, **kwargs)
+    return locked
+
+
+def _synchronize(cls):
+    """Every public method and property of cls (and __repr__) holds the
+    linkage's lock for its whole run, so a method that makes several C calls
+    (step() then its statistics, a getter sizing its output) sees no other
+    thread's call in between. closed reads one attribute and does not wait."""
+    for name, member in list(vars(cls).items()):
+        if name in ("closed", "close") or (name.startswith("_") and name != "__repr__"):
+            continue
+        if isinstance(member, property):
+            setattr(cls, name, property(_locked(member.fget),
+                                        _locked(member.fset) if member.fset else None, None,
+                                        member.__doc__))
+        elif callable(member) and not isinstance(member, (classmethod, staticmethod)):
+            setattr(cls, name, _locked(member))
+    return cls
+
+
+_synchronize(Linkage)
 
 from .urdf import URDFError, URDFWarning, load_urdf, save_urdf  # noqa: E402  (needs Linkage)

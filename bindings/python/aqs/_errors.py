@@ -67,6 +67,12 @@ class SizeError(Error, ValueError):
     status = _lib.ESIZE
 
 
+# Shown as aqs.SizeError etc. in tracebacks: the name users import them by.
+for _cls in (Error, InvalidArgument, RangeError, StateError, OutOfMemoryError, ModelError,
+             NumericError, SizeError):
+    _cls.__module__ = "aqs"
+del _cls
+
 BY_STATUS = {cls.status: cls for cls in (InvalidArgument, RangeError, StateError,
                                          OutOfMemoryError, ModelError, NumericError, SizeError)}
 

@@ -360,19 +360,36 @@ PROTOTYPES = {
 PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
 
 
+def _checkout_build_dir():
+    """The source checkout's build/ when this package is the checkout's
+    bindings/python/aqs (not an installed copy), else None."""
+    root = os.path.normpath(os.path.join(PACKAGE_DIR, "..", "..", ".."))
+    if not (os.path.isfile(os.path.join(root, "include", "aqs.h"))
+            and os.path.isfile(os.path.join(root, "bindings", "python", "pyproject.toml"))):
+        return None
+    return os.path.join(root, "build")
+
+
 def _candidates():
-    """Paths to try, in order, with a label saying where each came from."""
+    """Paths to try, in order, with a label saying where each came from:
+    AQS_LIBRARY alone when set; else the libaqs.so* inside the package, the
+    source checkout's build/, the system's (ctypes.util.find_library)."""
     env = os.environ.get("AQS_LIBRARY")
     if env:
-        # An explicit choice is final: never fall back to another library.
+        # An explicit choice is final: never fall back to another library. A
+        # bare file name (libaqs.so.0) is looked up by the dynamic loader.
         return [("AQS_LIBRARY", env)]
     found = []
-    shipped = sorted(glob.glob(os.path.join(PACKAGE_DIR, "libaqs.so*")))
+    # Installed with the package: the soname first (what the build writes).
+    shipped = sorted(glob.glob(os.path.join(PACKAGE_DIR, "libaqs.so*")),
+                     key=lambda p: (os.path.basename(p) != "libaqs.so.%d" % VERSION_MAJOR, p))
     found += [("package directory", p) for p in shipped]
-    build = os.path.normpath(os.path.join(PACKAGE_DIR, "..", "..", "..", "build"))
-    for pattern in ("libaqs.so", "libaqs.so.%d" % VERSION_MAJOR, "libaqs.so.%d.*" % VERSION_MAJOR):
-        found += [("source checkout build/", p)
-                  for p in sorted(glob.glob(os.path.join(build, pattern)))]
+    build = _checkout_build_dir()
+    if build is not None:
+        for pattern in ("libaqs.so", "libaqs.so.%d" % VERSION_MAJOR,
+                        "libaqs.so.%d.*" % VERSION_MAJOR):
+            found += [("source checkout build/", p)
+                      for p in sorted(glob.glob(os.path.join(build, pattern)))]
     system = ctypes.util.find_library("aqs")
     if system:
         found.append(("ctypes.util.find_library('aqs')", system))
@@ -391,8 +408,9 @@ def _load():
                                   % (path, exc)) from exc
             tried.append("%s (%s): %s" % (path, origin, exc))
     raise ImportError(
-        "aqs: libaqs not found. Set AQS_LIBRARY to the path of libaqs.so, ship libaqs.so in "
-        "%s, build the source checkout (make lib), or install it system-wide.%s"
+        "aqs: libaqs not found. Set AQS_LIBRARY to the path of libaqs.so, reinstall the "
+        "package (pip install ./bindings/python builds libaqs.so into %s), build the source "
+        "checkout (make lib), or install libaqs system-wide.%s"
         % (PACKAGE_DIR, "".join("\n  tried " + t for t in tried)))
 
 

@@ -148,7 +148,7 @@ def load_urdf(path, root="fixed", finalize=True, collision=False, physical_inert
     Raises URDFError for every file aqs cannot load (the message names the
     file, the link or joint and the value).
     """
-    from . import Linkage, _c, _lib, _from_status  # the package, loaded by now
+    from . import Linkage, _c, _lib, _from_status, _flag  # the package, loaded by now
 
     roots = {"fixed": _lib.URDF_ROOT_FIXED, "free": _lib.URDF_ROOT_FREE}
     if not isinstance(root, str) or root not in roots:
@@ -156,9 +156,9 @@ def load_urdf(path, root="fixed", finalize=True, collision=False, physical_inert
     options = _lib.aqs_urdf_options()
     _c.aqs_urdf_options_init(ctypes.byref(options))
     options.root = roots[root]
-    options.collision = 1 if collision else 0
-    options.finalize = 1 if finalize else 0
-    options.physical_inertia = 1 if physical_inertia else 0
+    options.collision = _flag(collision, "load_urdf", "collision")
+    options.finalize = _flag(finalize, "load_urdf", "finalize")
+    options.physical_inertia = _flag(physical_inertia, "load_urdf", "physical_inertia")
     linkage = Linkage()
     try:
         status = _c.aqs_linkage_load_urdf(linkage._h("aqs_linkage_load_urdf"),
