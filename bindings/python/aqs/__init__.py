@@ -746,8 +746,12 @@ class Linkage:
     def load_warnings(self):
         """What the URDF load of this linkage read but does not model, one
         entry per kind (aqs_linkage_load_warnings); [] when nothing."""
-        text = _c.aqs_linkage_load_warnings(self._h("aqs_linkage_load_warnings"))
-        text = text.decode("utf-8", errors="replace")
+        with self._lock:
+            handle = self._enter("aqs_linkage_load_warnings")
+            try:
+                text = _c.aqs_linkage_load_warnings(handle).decode("utf-8", errors="replace")
+            finally:
+                self._in_c = False
         return text.split("\n") if text else []
 
     def save_urdf(self, path, name="aqs"):

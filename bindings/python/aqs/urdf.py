@@ -148,7 +148,7 @@ def load_urdf(path, root="fixed", finalize=True, collision=False, physical_inert
     Raises URDFError for every file aqs cannot load (the message names the
     file, the link or joint and the value).
     """
-    from . import Linkage, _c, _lib, _from_status, _flag  # the package, loaded by now
+    from . import Linkage, _c, _lib, _flag, InvalidArgument, ModelError  # loaded by now
 
     roots = {"fixed": _lib.URDF_ROOT_FIXED, "free": _lib.URDF_ROOT_FREE}
     if not isinstance(root, str) or root not in roots:
@@ -161,14 +161,14 @@ def load_urdf(path, root="fixed", finalize=True, collision=False, physical_inert
     options.physical_inertia = _flag(physical_inertia, "load_urdf", "physical_inertia")
     linkage = Linkage()
     try:
-        status = _c.aqs_linkage_load_urdf(linkage._h("aqs_linkage_load_urdf"),
-                                          os.fsencode(os.fspath(path)), ctypes.byref(options))
-        if status != 0:
+        try:
+            linkage._call("aqs_linkage_load_urdf", os.fsencode(os.fspath(path)),
+                          ctypes.byref(options))
+        except (InvalidArgument, ModelError) as exc:
             message = linkage.last_error
-            if status in (_lib.EINVAL, _lib.EMODEL):
-                prefix = "aqs_linkage_load_urdf: "
-                raise URDFError(message[len(prefix):] if message.startswith(prefix) else message)
-            raise _from_status(status, message)
+            prefix = "aqs_linkage_load_urdf: "
+            raise URDFError(message[len(prefix):] if message.startswith(prefix) else message) \
+                from None
         for text in linkage.load_warnings:
             warnings.warn(text, URDFWarning, stacklevel=2)
     except BaseException:
