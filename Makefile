@@ -60,6 +60,15 @@ CCD_LIBS := $(shell pkg-config --libs ccd 2>/dev/null || echo -lccd)
 endif
 LDLIBS := $(CCD_LIBS) -lm
 
+# URDF loading (src/urdf.c) with expat, an optional feature: on when
+# pkg-config finds expat, off with AQS_URDF=0 (the load functions then return
+# AQS_ESTATE saying so). AQS_URDF=1 insists on it.
+AQS_URDF ?= $(shell pkg-config --exists expat 2>/dev/null && echo 1 || echo 0)
+ifeq ($(AQS_URDF),1)
+CFLAGS_LIB += -DAQS_HAVE_EXPAT $(shell pkg-config --cflags expat 2>/dev/null)
+LDLIBS += $(or $(shell pkg-config --libs expat 2>/dev/null),-lexpat)
+endif
+
 SRCS := $(sort $(wildcard src/*.c))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
 SONAME := libaqs.so.$(MAJOR)
@@ -225,10 +234,12 @@ install: lib
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libaqs.so
 	install -m 644 $(STLIB) $(DESTDIR)$(LIBDIR)/libaqs.a
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
-	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' aqs.pc.in \
+	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' \
+	    -e 's|@URDF_REQUIRES@|$(if $(filter 1,$(AQS_URDF)), expat)|g' aqs.pc.in \
 	    > $(DESTDIR)$(LIBDIR)/pkgconfig/aqs.pc
 	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@SONAME@|$(SONAME)|g' \
 	    -e 's|@REL_LIBDIR@|$(CMAKE_REL_LIBDIR)|g' -e 's|@REL_INCLUDEDIR@|$(CMAKE_REL_INCLUDEDIR)|g' \
+	    -e 's|@URDF_LIBS@|$(if $(filter 1,$(AQS_URDF)),;expat)|g' \
 	    cmake/aqsConfig.cmake.in > $(DESTDIR)$(CMAKEDIR)/aqsConfig.cmake
 	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@MAJOR@|$(MAJOR)|g' -e 's|@SIZEOF_VOID_P@|$(SIZEOF_VOID_P)|g' \
 	    cmake/aqsConfigVersion.cmake.in > $(DESTDIR)$(CMAKEDIR)/aqsConfigVersion.cmake

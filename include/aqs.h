@@ -123,21 +123,28 @@ AQS_API const char *aqs_linkage_last_error(const aqs_linkage *linkage);
 #define AQS_JOINT_CYLINDRICAL 6 /**< rotation q1 about a and translation q2 along a (2, 2) */
 #define AQS_JOINT_PLANAR 7      /**< translation q1 u + q2 v, then rotation q3 about a (3, 3) */
 
-/** Whether aqs_body_add requires physically realizable inertias: principal
- *  moments obeying the triangle inequality (I1 + I2 >= I3), which every real
- *  mass distribution has. physical: 1 (the default) or 0 (accept any
- *  symmetric positive definite inertia, e.g. for synthetic test models).
+/** Whether aqs_body_add requires physically realizable inertias: positive
+ *  semi-definite, principal moments obeying the triangle inequality
+ *  (I1 + I2 >= I3), which every real mass distribution has. physical: 1 (the
+ *  default) or 0 (accept any symmetric inertia, e.g. for synthetic test
+ *  models or the per-link data of CAD exports; finalize still requires every
+ *  moving rigid group to have mass and a positive definite inertia).
  *  Building phase only. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE. */
 AQS_API aqs_status aqs_linkage_set_inertia_check(aqs_linkage *linkage, int32_t physical);
 
 /** Add a rigid body.
- *  mass: kg, finite, >= 0 (0 only for a body welded by fixed joints to a
- *        massive body or to the world; checked at finalize).
+ *  mass: kg, finite, >= 0.
  *  com: (3) centre of mass in the body frame, m.
  *  inertia: (3 x 3, row-major) rotational inertia about the centre of mass in
- *        the body frame, kg m^2: symmetric (relative 1e-9), positive definite
- *        (semi-definite if mass is 0), principal moments obeying the triangle
- *        inequality (relative 1e-9) unless aqs_linkage_set_inertia_check(0).
+ *        the body frame, kg m^2: symmetric (relative 1e-9); positive
+ *        semi-definite (relative 1e-9) with principal moments obeying the
+ *        triangle inequality (relative 1e-9) unless
+ *        aqs_linkage_set_inertia_check(0).
+ *  One rule for every mass: (0, zeros) and (0.01, zeros) are both accepted
+ *  here. What the solvers need -- mass > 0 and a positive definite inertia --
+ *  is checked at finalize on each rigid group (bodies welded by fixed joints;
+ *  groups welded to the world are exempt), so a massless or point-mass body
+ *  welded to a massive one is fine, and one that moves alone is AQS_EMODEL.
  *  out_body: receives the new body index (may be NULL).
  *  Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_body_add(aqs_linkage *linkage, double mass, const double com[3],
@@ -235,6 +242,121 @@ AQS_API aqs_status aqs_body_get_inertial(const aqs_linkage *linkage, int32_t bod
 AQS_API aqs_status aqs_joint_get_definition(const aqs_linkage *linkage, int32_t joint,
                                             int32_t *type, int32_t *parent, int32_t *child,
                                             double pos[3], double quat[4], double axis[3]);
+
+/* ------------------------------------------------------------------------
+ * Names and joint limits (any phase; what model files carry besides the
+ * mechanics; none of it changes a solve)
+ * ---------------------------------------------------------------------- */
+
+/** Name a body: name is copied (non-NULL, 1..4096 bytes, any bytes but NUL;
+ *  UTF-8 suggested). Renaming replaces the old name. Names need not be
+ *  unique (aqs_body_find returns the lowest index). Any phase.
+ *  Returns AQS_OK, AQS_EINVAL (NULL or empty name), AQS_ERANGE, AQS_ENOMEM. */
+AQS_API aqs_status aqs_body_set_name(aqs_linkage *linkage, int32_t body, const char *name);
+
+/** Name a joint, as aqs_body_set_name. */
+AQS_API aqs_status aqs_joint_set_name(aqs_linkage *linkage, int32_t joint, const char *name);
+
+/** The name of a body into *name (non-NULL): the linkage's own copy, "" when
+ *  unnamed, valid until the body is renamed or the linkage destroyed.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
+AQS_API aqs_status aqs_body_get_name(const aqs_linkage *linkage, int32_t body, const char **name);
+
+/** The name of a joint, as aqs_body_get_name. */
+AQS_API aqs_status aqs_joint_get_name(const aqs_linkage *linkage, int32_t joint,
+                                      const char **name);
+
+/** The lowest-numbered body named name (exact bytes) into *out_body
+ *  (non-NULL; -1 when none). A linear scan, O(bodies): look names up once,
+ *  keep the indices. Returns AQS_OK, AQS_EINVAL (NULL name or out_body),
+ *  AQS_ERANGE (no body has that name). */
+AQS_API aqs_status aqs_body_find(const aqs_linkage *linkage, const char *name, int32_t *out_body);
+
+/** The lowest-numbered joint named name, as aqs_body_find. */
+AQS_API aqs_status aqs_joint_find(const aqs_linkage *linkage, const char *name,
+                                  int32_t *out_joint);
+
+/** Keep a joint's limits (URDF <limit>), for the caller to read back: the
+ *  solvers do NOT enforce them (quasi-statics integrates past them; clamp
+ *  positions yourself if you need to). lower <= upper: position limits, m or
+ *  rad (-INFINITY / INFINITY: none); effort (N or N m) and velocity (m/s or
+ *  rad/s): >= 0, INFINITY for none. Infinities are allowed here, NaN is not.
+ *  A new joint has (-inf, inf, inf, inf). Any phase.
+ *  Returns AQS_OK, AQS_EINVAL, AQS_ERANGE. */
+AQS_API aqs_status aqs_joint_set_limits(aqs_linkage *linkage, int32_t joint, double lower,
+                                        double upper, double effort, double velocity);
+
+/** A joint's limits (see aqs_joint_set_limits). Each out pointer may be NULL.
+ *  Returns AQS_OK, AQS_EINVAL (NULL linkage), AQS_ERANGE. */
+AQS_API aqs_status aqs_joint_get_limits(const aqs_linkage *linkage, int32_t joint, double *lower,
+                                        double *upper, double *effort, double *velocity);
+
+/* ------------------------------------------------------------------------
+ * Loading URDF models (an optional build feature: needs expat)
+ * ---------------------------------------------------------------------- */
+
+/** Root link with mass: what joins it to the world (aqs_urdf_options.root). */
+#define AQS_URDF_ROOT_FIXED 0 /**< welded to the world (Pinocchio's and MuJoCo's default) */
+#define AQS_URDF_ROOT_FREE 1  /**< a free joint: the robot floats (see docs/urdf.md) */
+
+/** Options of aqs_linkage_load_urdf. Fill with aqs_urdf_options_init, then
+ *  change fields; the library reads only the fields that size covers. */
+typedef struct aqs_urdf_options {
+    uint32_t size;     /**< sizeof(aqs_urdf_options), set by aqs_urdf_options_init */
+    int32_t root;      /**< AQS_URDF_ROOT_* (default AQS_URDF_ROOT_FIXED) */
+    int32_t collision; /**< 1: <collision> spheres, boxes, cylinders, capsules become
+                            shapes (aqs_shape_add); 0 (default): collision ignored */
+    int32_t finalize;  /**< 1 (default): finalize after loading; 0: leave it building */
+    int32_t physical_inertia; /**< 0 (default): a link inertia no real body has (not
+                                   positive semi-definite, or violating the triangle
+                                   inequality: common in CAD exports) is loaded as given and
+                                   listed in the warnings, and only its rigid group is
+                                   checked (at finalize); 1: it is an error, as
+                                   aqs_linkage_set_inertia_check(1) makes it for aqs_body_add */
+} aqs_urdf_options;
+
+/** Fill options with the defaults and options->size. options non-NULL. */
+AQS_API void aqs_urdf_options_init(aqs_urdf_options *options);
+
+/** Whether this library was built with URDF loading (1) or without (0: the
+ *  load functions then return AQS_ESTATE saying so). */
+AQS_API int32_t aqs_urdf_supported(void);
+
+/** Load a URDF file into linkage, which must be empty (no body, no joint,
+ *  not finalized: create it with aqs_linkage_create or with an allocator;
+ *  all memory, the parser's included, comes from its allocator).
+ *  Bodies are the links in document order (a massless root link is the
+ *  world, not a body), joints the URDF joints in document order, preceded by
+ *  joint 0 "world_to_<root>" when the root link has mass; bodies and joints
+ *  are named after their links and joints, <limit> is kept
+ *  (aqs_joint_get_limits). Rules and mapping: docs/urdf.md.
+ *  path: a file (non-NULL). options: NULL for the defaults.
+ *  On failure the linkage is left empty and aqs_linkage_last_error() gives
+ *  "aqs_linkage_load_urdf: <path>: <what, naming the link or joint and the
+ *  value>". On success, what the loader read but does not model (mimic,
+ *  transmissions, gazebo tags, meshes, dynamics...) is listed by
+ *  aqs_linkage_load_warnings().
+ *  Returns AQS_OK, AQS_EINVAL (NULL argument, bad options, a file aqs cannot
+ *  load: not XML, not URDF, an unknown encoding, bad values, topology),
+ *  AQS_ESTATE (linkage not empty; or built without URDF support),
+ *  AQS_EMODEL (finalize refused the model: a rigid group without mass or
+ *  with a singular inertia), AQS_ENOMEM; a file that cannot be read is
+ *  AQS_EINVAL. */
+AQS_API aqs_status aqs_linkage_load_urdf(aqs_linkage *linkage, const char *path,
+                                         const aqs_urdf_options *options);
+
+/** Load a URDF document from memory: data (size bytes; need not be
+ *  NUL-terminated), name used in messages in place of the path (NULL:
+ *  "<buffer>"). Otherwise as aqs_linkage_load_urdf. */
+AQS_API aqs_status aqs_linkage_load_urdf_buffer(aqs_linkage *linkage, const char *data,
+                                                size_t size, const char *name,
+                                                const aqs_urdf_options *options);
+
+/** What the last successful URDF load into this linkage read but does not
+ *  model: one warning per line ("\n"-separated, no trailing newline), each
+ *  naming the elements, links or joints concerned; "" when nothing.
+ *  Valid until the next load or aqs_linkage_destroy. Never NULL. */
+AQS_API const char *aqs_linkage_load_warnings(const aqs_linkage *linkage);
 
 /* ------------------------------------------------------------------------
  * Loads (any phase; persistent until changed or cleared)

@@ -177,6 +177,7 @@ AQS_API void aqs_linkage_destroy(aqs_linkage *L)
 {
     if (!L) return;
     collide_free(L);
+    lk_names_free(L);
     free_solver(L);
     lk_free(L, L->bodies);
     lk_free(L, L->loads);
@@ -415,6 +416,8 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
     joint_directions(jd.axis, jd.u, jd.v);
     jd.qoff = L->nq;
     jd.voff = L->nv;
+    jd.limits[0] = -HUGE_VAL; /* no limits until aqs_joint_set_limits */
+    jd.limits[1] = jd.limits[2] = jd.limits[3] = HUGE_VAL;
     joint_zero_position(type, L->q + L->nq);
     for (i = 0; i < nv; i++) L->tau[L->nv + i] = 0.0;
     L->joints[L->njoints] = jd;

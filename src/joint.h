@@ -14,6 +14,7 @@ typedef struct {
     int32_t type, parent, child;
     double pos[3], quat[4], axis[3], u[3], v[3];
     int32_t qoff, voff; /* offsets in the bulk position / acceleration arrays */
+    double limits[4];   /* lower, upper, effort, velocity (aqs_joint_set_limits); kept, not enforced */
 } joint_def;
 
 int joint_nq(int32_t type);

@@ -165,7 +165,7 @@ struct aqs_linkage {
     aqs_alloc_fn alloc;
     aqs_free_fn free_fn;
     void *user;
-    char error[320];
+    char error[640];
     int finalized;
     int solved;
     int loads_dirty;  /* body loads changed, or positions moved (world-frame loads) */
@@ -203,7 +203,17 @@ struct aqs_linkage {
     aba_state aba;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
+    char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
+    char **joint_name;
+    int32_t body_name_cap, joint_name_cap;
+    char *load_warnings;  /* what the last URDF load did not model (src/urdf.c); NULL = none */
 };
+
+/* The name of a body / joint, or NULL (src/names.c). */
+const char *lk_body_name(const aqs_linkage *L, int32_t body);
+const char *lk_joint_name(const aqs_linkage *L, int32_t joint);
+/* Release the names and the load warnings (aqs_linkage_destroy). */
+void lk_names_free(aqs_linkage *L);
 
 /* Memory through the linkage's allocator. */
 void *lk_alloc(aqs_linkage *L, size_t bytes);

@@ -3,6 +3,7 @@
 #include "model.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "dense.h"
@@ -64,22 +65,49 @@ aqs_status model_check_body(aqs_linkage *L, const char *fn, double mass, const d
         dense_symmetrize(S, 3);
         sym3_eigenvalues(S, ev);
     }
+    /* One rule for every mass, 0 included: the inertia must be positive
+     * semi-definite (any symmetric one with the lax check). Positive definiteness is what the solvers need, and they
+     * need it of each rigid group (bodies welded by fixed joints), so finalize
+     * checks it there: a point mass welded to a massive body is fine. */
     tol = 1e-9 * (fabs(ev[0]) + fabs(ev[1]) + fabs(ev[2]));
-    if (mass > 0.0 && !(ev[0] > 0.0))
+    if (!L->lax_inertia && ev[0] < -tol)
         return lk_fail(L, AQS_EINVAL,
-                       "%s: inertia is not positive definite (smallest principal moment %g)",
-                       fn, ev[0]);
-    if (mass == 0.0 && ev[0] < -tol)
-        return lk_fail(L, AQS_EINVAL,
-                       "%s: inertia of a massless body must be positive semi-definite "
-                       "(smallest principal moment %g)",
-                       fn, ev[0]);
+                       "%s: inertia is not positive semi-definite (smallest principal moment "
+                       "%g; mass %g)",
+                       fn, ev[0], mass);
     if (!L->lax_inertia && ev[0] + ev[1] < ev[2] - tol)
         return lk_fail(L, AQS_EINVAL,
                        "%s: principal moments %g, %g, %g violate the triangle inequality "
                        "(see aqs_linkage_set_inertia_check)", fn,
                        ev[0], ev[1], ev[2]);
     return AQS_OK;
+}
+
+/* Whether the rigid group with spatial inertia I (about its frame's origin O,
+ * [I_O, m [c]x; m [c]x^T, m 1]) has a positive definite rotational inertia
+ * about its centre of mass: I_c = I_O + m [c]x [c]x, with c = h / m read from
+ * the off-diagonal block. Its smallest principal moment must exceed 1e-12 of
+ * tr(I_O): the rounding of I_c's computation is ~1e-16 tr(I_O), so a point
+ * mass alone (I_c = 0 exactly) can never pass as definite. */
+static int rotational_inertia_definite(const double I[36])
+{
+    double mass = I[21], c[3], Ic[9], ev[3], trace;
+    int r, k;
+    if (!(mass > 0.0)) return 0;
+    /* top-right block m [c]x = [0 -m cz m cy; m cz 0 -m cx; -m cy m cx 0] */
+    c[0] = I[6 * 2 + 4] / mass;
+    c[1] = I[6 * 0 + 5] / mass;
+    c[2] = I[6 * 1 + 3] / mass;
+    for (r = 0; r < 3; r++)
+        for (k = 0; k < 3; k++) Ic[3 * r + k] = I[6 * r + k];
+    /* [c]x [c]x = c c^T - |c|^2 1 */
+    for (r = 0; r < 3; r++)
+        for (k = 0; k < 3; k++)
+            Ic[3 * r + k] += mass * (c[r] * c[k] - (r == k ? c[0] * c[0] + c[1] * c[1] + c[2] * c[2] : 0.0));
+    dense_symmetrize(Ic, 3);
+    sym3_eigenvalues(Ic, ev);
+    trace = I[0] + I[7] + I[14];
+    return isfinite(ev[0]) && ev[0] > 1e-12 * trace;
 }
 
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
@@ -243,12 +271,21 @@ aqs_status model_build(aqs_linkage *L)
     }
     for (i = 0; i < m->ncomp; i++) {
         double mass = m->comp_inertia[36 * i + 21]; /* the (3,3) entry is the total mass */
-        if (!(mass > 0.0) || dense_spd_inverse(m->comp_inertia + 36 * i, m->comp_inverse + 36 * i, 6) != 0) {
+        if (!(mass > 0.0) || !rotational_inertia_definite(m->comp_inertia + 36 * i) ||
+            dense_spd_inverse(m->comp_inertia + 36 * i, m->comp_inverse + 36 * i, 6) != 0) {
+            const char *name = lk_body_name(L, m->comp_root[i]);
+            int32_t count = 0;
+            for (k = 0; k < nb; k++) count += m->comp_of_body[k] == i;
+            char group[64];
+            if (count > 1) snprintf(group, sizeof group, "with %d more welded to it by fixed joints", (int)count - 1);
+            else snprintf(group, sizeof group, "welded to no other body");
             st = lk_fail(L, AQS_EMODEL,
-                         "aqs_linkage_finalize: body %d (with the bodies welded to it by fixed "
-                         "joints) has total mass %g or a singular inertia; a massless body must "
-                         "be welded to a massive one",
-                         (int)m->comp_root[i], mass);
+                         "aqs_linkage_finalize: body %d%s%s%s (%s) has %s (total mass %g); every "
+                         "rigid group that moves needs mass and a positive definite inertia: a "
+                         "massless or point-mass body must be welded to a massive one",
+                         (int)m->comp_root[i], name ? " '" : "", name ? name : "",
+                         name ? "'" : "", group, !(mass > 0.0) ? "no mass" : "a singular inertia",
+                         mass);
             goto fail;
         }
     }

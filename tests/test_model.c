@@ -100,27 +100,61 @@ static void test_inertia_symmetric(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* One rule at aqs_body_add for every mass (positive semi-definite), and
+ * positive definiteness required of each moving rigid group at finalize. */
 static void test_inertia_definite(void **state)
 {
     aqs_linkage *L = test_new_linkage();
-    double com[3] = {0, 0, 0};
+    double com[3] = {0, 0, 0}, off[3] = {0.1, -0.2, 0.05};
     double notpd[9] = {1, 2, 0, 2, 1, 0, 0, 0, 1}; /* eigenvalues -1, 1, 3 */
     double psd[9] = {1, 0, 0, 0, 1, 0, 0, 0, 0};   /* eigenvalues 0, 1, 1 */
-    double zero[9] = {0};
+    double zero[9] = {0}, unit[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double pos[3] = {0.3, 0, 0}, quat[4] = {1, 0, 0, 0}, axis[3] = {0, 0, 1};
     (void)state;
     assert_int_equal(aqs_body_add(L, 1.0, com, notpd, NULL), AQS_EINVAL);
-    test_assert_contains(aqs_linkage_last_error(L), "not positive definite");
+    test_assert_contains(aqs_linkage_last_error(L), "not positive semi-definite");
     test_assert_contains(aqs_linkage_last_error(L), "-1");
-    assert_int_equal(aqs_body_add(L, 1.0, com, psd, NULL), AQS_EINVAL);
-    test_assert_contains(aqs_linkage_last_error(L), "not positive definite (smallest principal moment 0)");
-    assert_int_equal(aqs_body_add(L, 1.0, com, zero, NULL), AQS_EINVAL);
-    /* a massless body may have a semi-definite (even zero) inertia, not an
-     * indefinite one */
-    assert_int_equal(aqs_body_add(L, 0.0, com, psd, NULL), AQS_OK);
-    assert_int_equal(aqs_body_add(L, 0.0, com, zero, NULL), AQS_OK);
     assert_int_equal(aqs_body_add(L, 0.0, com, notpd, NULL), AQS_EINVAL);
     test_assert_contains(aqs_linkage_last_error(L), "semi-definite");
-    assert_int_equal(body_count(L), 2);
+    /* (0.01, zeros) is accepted exactly as (0, zeros) is */
+    assert_int_equal(aqs_body_add(L, 1.0, com, unit, NULL), AQS_OK);  /* 0 */
+    assert_int_equal(aqs_body_add(L, 0.01, off, zero, NULL), AQS_OK); /* 1 point mass */
+    assert_int_equal(aqs_body_add(L, 0.0, com, zero, NULL), AQS_OK);  /* 2 massless */
+    assert_int_equal(aqs_body_add(L, 1.0, com, psd, NULL), AQS_OK);   /* 3 a rod */
+    assert_int_equal(body_count(L), 4);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_FIXED, 0, 1, pos, quat, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_FIXED, 1, 2, pos, quat, NULL, NULL), AQS_OK);
+    /* the rod moves alone: its group (itself) has a singular inertia */
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, 2, 3, pos, quat, axis, NULL), AQS_OK);
+    assert_int_equal(aqs_body_set_name(L, 3, "rod"), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
+    test_assert_contains(aqs_linkage_last_error(L), "body 3 'rod' (welded to no other body) has a singular inertia");
+    aqs_linkage_destroy(L);
+
+    /* A point mass moving alone: singular; welded to the rod, whose axis it
+     * is off: the group is definite and finalize accepts it. */
+    L = test_new_linkage();
+    assert_int_equal(aqs_body_add(L, 0.01, off, zero, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
+    test_assert_contains(aqs_linkage_last_error(L), "body 0 (welded to no other body) has a singular inertia (total mass 0.01)");
+    aqs_linkage_destroy(L);
+    L = test_new_linkage();
+    assert_int_equal(aqs_body_add(L, 1.0, com, psd, NULL), AQS_OK);
+    assert_int_equal(aqs_body_add(L, 0.01, com, zero, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_FIXED, 0, 1, off, quat, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    aqs_linkage_destroy(L);
+
+    /* The lax check accepts an indefinite body; its group is still checked. */
+    L = test_new_linkage();
+    assert_int_equal(aqs_linkage_set_inertia_check(L, 0), AQS_OK);
+    assert_int_equal(aqs_body_add(L, 1.0, com, notpd, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
+    test_assert_contains(aqs_linkage_last_error(L), "singular inertia");
     aqs_linkage_destroy(L);
 }
 

@@ -10,8 +10,8 @@ set -euo pipefail
 peers=0
 [ "${1:-}" = "--peers" ] && peers=1
 # cmake: the CMake consumer of tests/install/run.sh; abigail-tools: abidw/abidiff of
-# tests/abi/check.sh.
-pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config cmake abigail-tools)
+# tests/abi/check.sh; libexpat1-dev: URDF loading (optional for the library, tested).
+pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config cmake abigail-tools libexpat1-dev)
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

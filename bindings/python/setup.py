@@ -6,7 +6,8 @@ through setuptools (pyproject.toml). The package itself is pure Python
 aqs/libaqs.so.MAJOR from the repository's src/*.c with the C compiler, the
 way the Makefile builds build/libaqs.so (same flags and version script; no
 -Werror), linked against libccd (Debian: libccd-dev to build, libccd2 at run
-time). The wheel is therefore platform-specific but works with any Python 3
+time), and against expat for URDF loading when pkg-config finds it (Debian:
+libexpat1-dev; AQS_URDF=0 leaves it out, as in the Makefile). The wheel is therefore platform-specific but works with any Python 3
 (tag py3-none-<platform>).
 
 Where the C sources are, first found of:
@@ -68,6 +69,28 @@ def header_version(root):
                  for part in ("MAJOR", "MINOR", "PATCH"))
 
 
+def _urdf_support():
+    """Whether to build the URDF loader (src/urdf.c with expat), as the
+    Makefile decides: AQS_URDF=0/1 when set, else whether pkg-config finds
+    expat (Debian: libexpat1-dev). Returns (cflags, libs)."""
+    wanted = os.environ.get("AQS_URDF")
+    if wanted is None:
+        try:
+            wanted = "1" if subprocess.run(["pkg-config", "--exists", "expat"]).returncode == 0 \
+                else "0"
+        except OSError:
+            wanted = "0"
+    if wanted != "1":
+        return [], []
+    def query(option, fallback):
+        try:
+            out = subprocess.run(["pkg-config", option, "expat"], capture_output=True, text=True)
+            return shlex.split(out.stdout) if out.returncode == 0 and out.stdout.strip() else fallback
+        except OSError:
+            return fallback
+    return ["-DAQS_HAVE_EXPAT"] + query("--cflags", []), query("--libs", ["-lexpat"])
+
+
 def _env_flags(name):
     return shlex.split(os.environ.get(name, ""))
 
@@ -92,6 +115,8 @@ class build_libaqs(build_ext):
                    "-DAQS_BUILDING_LIBRARY", "-I" + os.path.join(root, "include"),
                    "-I" + os.path.join(root, "src")]
                   + _env_flags("CPPFLAGS") + _env_flags("CFLAGS"))
+        urdf_cflags, urdf_libs = _urdf_support()
+        cflags += urdf_cflags
         sources = sorted(glob.glob(os.path.join(root, "src", "*.c")))
 
         def compile_one(source):
@@ -114,7 +139,7 @@ class build_libaqs(build_ext):
         link = (cc + ["-shared", "-Wl,-soname," + name, "-Wl,--no-undefined"]
                 + (["-Wl,--version-script=" + version_script]
                    if os.path.isfile(version_script) else [])
-                + _env_flags("LDFLAGS") + ["-o", target] + objects + ["-lccd", "-lm"])
+                + _env_flags("LDFLAGS") + ["-o", target] + objects + ["-lccd"] + urdf_libs + ["-lm"])
         result = subprocess.run(link, capture_output=True, text=True)
         if result.returncode != 0:
             hint = ""

@@ -56,11 +56,14 @@ PARAMS = {
     "aqs_solve_stats *": [ctypes.POINTER(_lib.aqs_solve_stats)],
     "uint32_t": [ctypes.c_uint32], "aqs_contact *": [_lib.contact_p],
     "size_t *": [_lib.size_p],
+    "const char *": [ctypes.c_char_p], "const char **": [ctypes.POINTER(ctypes.c_char_p)],
+    "aqs_urdf_options *": [_lib.urdf_options_p], "const aqs_urdf_options *": [_lib.urdf_options_p],
 }
 #: C types of struct fields -> the ctypes type that mirrors them.
 FIELD_TYPES = {"uint32_t": ctypes.c_uint32, "int32_t": ctypes.c_int32, "double": ctypes.c_double}
 #: Each struct of the header -> its ctypes.Structure.
-STRUCTS = {"aqs_solve_stats": _lib.aqs_solve_stats, "aqs_contact": _lib.aqs_contact}
+STRUCTS = {"aqs_solve_stats": _lib.aqs_solve_stats, "aqs_contact": _lib.aqs_contact,
+           "aqs_urdf_options": _lib.aqs_urdf_options}
 
 
 def normalize(c_type):

@@ -120,6 +120,10 @@ CALLS = [
     ("set_collision_filter", (0, 1, 1)), ("exclude_collision", (0, -1)), ("set_collide_joined", (True,)),
     ("collide", ()), ("any_contact", ()), ("collision_stats", ()), ("set_contact_stiffness", (10.0,)),
     ("body_inertial", (0,)), ("joint_definition", (0,)), ("save_urdf", ("never-written.urdf",)),
+    # names and limits
+    ("set_body_name", (0, "b")), ("set_joint_name", (0, "j")), ("body_name", (0,)),
+    ("joint_name", (0,)), ("find_body", ("b",)), ("find_joint", ("j",)),
+    ("set_joint_limits", (0, -1.0, 1.0)), ("joint_limits", (0,)),
 ]
 
 
@@ -134,7 +138,8 @@ def test_closed_linkage_raises_state_error(name, args):
 def test_closed_linkage_properties_raise_state_error():
     L = small_linkage()
     L.close()
-    for name in ("num_bodies", "num_joints", "nq", "nv", "last_error", "shape_count"):
+    for name in ("num_bodies", "num_joints", "nq", "nv", "last_error", "shape_count",
+                 "body_names", "joint_names", "load_warnings"):
         with pytest.raises(aqs.StateError):
             getattr(L, name)
 
@@ -142,7 +147,8 @@ def test_closed_linkage_properties_raise_state_error():
 def test_every_method_listed():
     public = {n for n in dir(aqs.Linkage) if not n.startswith("_")}
     listed = {c[0] for c in CALLS} | {"num_bodies", "num_joints", "nq", "nv", "last_error",
-                                      "close", "closed", "with_allocator", "shape_count"}
+                                      "close", "closed", "with_allocator", "shape_count",
+                                      "body_names", "joint_names", "load_warnings"}
     assert public == listed
 
 

@@ -62,6 +62,7 @@ import collections
 import ctypes
 import dataclasses
 import functools
+import math
 import numbers
 import operator
 import threading
@@ -80,6 +81,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
+from ._lib import URDF_ROOT_FIXED, URDF_ROOT_FREE
 from ._errors import from_status as _from_status
 
 __all__ = [
@@ -98,6 +100,7 @@ __all__ = [
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
     "CollisionStats",
     "BodyInertial", "JointDefinition", "load_urdf", "save_urdf", "URDFError",
+    "URDFWarning", "JointLimits", "URDF_ROOT_FIXED", "URDF_ROOT_FREE",
 ]
 
 __version__ = "0.1.0"
@@ -123,6 +126,11 @@ Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (
 JointLayout = collections.namedtuple("JointLayout", "q_offset nq v_offset nv")
 JointLayout.__doc__ = ("Where a joint's values sit in the bulk arrays: q_offset/nq in "
                        "positions(), v_offset/nv in accelerations() and joint forces.")
+
+JointLimits = collections.namedtuple("JointLimits", "lower upper effort velocity")
+JointLimits.__doc__ = ("A joint's limits (Linkage.joint_limits): lower, upper (m or rad; "
+                       "-inf / inf: none), effort (N or N m), velocity (m/s or rad/s; inf: "
+                       "none). Kept, not enforced by the solvers.")
 
 BodyInertial = collections.namedtuple("BodyInertial", "mass com inertia")
 BodyInertial.__doc__ = ("A body's mass properties as added (Linkage.body_inertial): mass (kg), "
@@ -640,6 +648,114 @@ class Linkage:
         return JointDefinition(_KIND_NAMES.get(kind.value, kind.value), parent.value,
                                child.value, pos, quat, axis)
 
+    # -- names and limits ------------------------------------------------------
+
+    @staticmethod
+    def _name_bytes(name, function):
+        if not isinstance(name, str):
+            raise TypeError("%s: name must be a str, got %r (%s)"
+                            % (function, name, type(name).__name__))
+        data = name.encode("utf-8")
+        if b"\0" in data:
+            raise InvalidArgument("%s: name = %r contains a NUL character" % (function, name))
+        return data
+
+    def set_body_name(self, body, name):
+        """Name a body (aqs_body_set_name): a non-empty str, stored as UTF-8."""
+        f = "aqs_body_set_name"
+        self._call(f, _index(body, f, "body"), self._name_bytes(name, f))
+
+    def set_joint_name(self, joint, name):
+        """Name a joint (aqs_joint_set_name): a non-empty str, stored as UTF-8."""
+        f = "aqs_joint_set_name"
+        self._call(f, _index(joint, f, "joint"), self._name_bytes(name, f))
+
+    def body_name(self, body):
+        """A body's name ("" when unnamed; aqs_body_get_name)."""
+        f = "aqs_body_get_name"
+        out = ctypes.c_char_p()
+        self._call(f, _index(body, f, "body"), ctypes.byref(out))
+        return out.value.decode("utf-8", errors="replace")
+
+    def joint_name(self, joint):
+        """A joint's name ("" when unnamed; aqs_joint_get_name)."""
+        f = "aqs_joint_get_name"
+        out = ctypes.c_char_p()
+        self._call(f, _index(joint, f, "joint"), ctypes.byref(out))
+        return out.value.decode("utf-8", errors="replace")
+
+    def find_body(self, name):
+        """The lowest-numbered body named name (aqs_body_find); RangeError if none."""
+        f = "aqs_body_find"
+        out = ctypes.c_int32()
+        self._call(f, self._name_bytes(name, f), ctypes.byref(out))
+        return out.value
+
+    def find_joint(self, name):
+        """The lowest-numbered joint named name (aqs_joint_find); RangeError if none."""
+        f = "aqs_joint_find"
+        out = ctypes.c_int32()
+        self._call(f, self._name_bytes(name, f), ctypes.byref(out))
+        return out.value
+
+    @property
+    def body_names(self):
+        """Every body's name, in body order ("" for unnamed bodies). Assign a
+        list of one name per body to name them all."""
+        return [self.body_name(b) for b in range(self.num_bodies)]
+
+    @body_names.setter
+    def body_names(self, names):
+        names = list(names)
+        if len(names) != self.num_bodies:
+            raise SizeError("body_names: %d names for %d bodies" % (len(names), self.num_bodies))
+        for b, name in enumerate(names):
+            self.set_body_name(b, name)
+
+    @property
+    def joint_names(self):
+        """Every joint's name, in joint order ("" for unnamed joints). Assign a
+        list of one name per joint to name them all."""
+        return [self.joint_name(j) for j in range(self.num_joints)]
+
+    @joint_names.setter
+    def joint_names(self, names):
+        names = list(names)
+        if len(names) != self.num_joints:
+            raise SizeError("joint_names: %d names for %d joints" % (len(names), self.num_joints))
+        for j, name in enumerate(names):
+            self.set_joint_name(j, name)
+
+    def set_joint_limits(self, joint, lower=-math.inf, upper=math.inf, effort=math.inf,
+                         velocity=math.inf):
+        """Keep a joint's limits (aqs_joint_set_limits). Not enforced by the
+        solvers: quasi-statics moves past them. lower <= upper (m or rad),
+        effort, velocity >= 0; infinities mean none."""
+        f = "aqs_joint_set_limits"
+        values = [_number(v, f, label) for label, v in
+                  (("lower", lower), ("upper", upper), ("effort", effort),
+                   ("velocity", velocity))]
+        self._call(f, _index(joint, f, "joint"), *values)
+
+    def joint_limits(self, joint):
+        """JointLimits(lower, upper, effort, velocity) of a joint (aqs_joint_get_limits)."""
+        f = "aqs_joint_get_limits"
+        out = [ctypes.c_double() for _ in range(4)]
+        self._call(f, _index(joint, f, "joint"), *(ctypes.byref(v) for v in out))
+        return JointLimits(*(v.value for v in out))
+
+    @property
+    def load_warnings(self):
+        """What the URDF load of this linkage read but does not model, one
+        entry per kind (aqs_linkage_load_warnings); [] when nothing."""
+        with self._lock:
+            handle = self._enter("aqs_linkage_load_warnings")
+            try:
+                text = _c.aqs_linkage_load_warnings(handle).decode("utf-8", errors="replace")
+            finally:
+                self._in_c = False
+        return text.split("\n") if text else []
+
     def save_urdf(self, path, name="aqs"):
         """Write the model (at q = 0) as URDF to path; see aqs.save_urdf."""
         from .urdf import save_urdf
@@ -1039,7 +1155,9 @@ def _synchronize(cls):
         if name in ("closed", "close") or (name.startswith("_") and name != "__repr__"):
             continue
         if isinstance(member, property):
-            setattr(cls, name, property(_locked(member.fget), None, None, member.__doc__))
+            setattr(cls, name, property(_locked(member.fget),
+                                        _locked(member.fset) if member.fset else None, None,
+                                        member.__doc__))
         elif callable(member) and not isinstance(member, (classmethod, staticmethod)):
             setattr(cls, name, _locked(member))
     return cls
@@ -1047,4 +1165,4 @@ def _synchronize(cls):
 
 _synchronize(Linkage)
 
-from .urdf import URDFError, load_urdf, save_urdf  # noqa: E402  (needs Linkage)
+from .urdf import URDFError, URDFWarning, load_urdf, save_urdf  # noqa: E402  (needs Linkage)

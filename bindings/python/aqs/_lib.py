@@ -185,6 +185,25 @@ class aqs_solve_stats(ctypes.Structure):
 
 solve_stats_p = ctypes.POINTER(aqs_solve_stats)
 
+# URDF loading (AQS_URDF_ROOT_*).
+URDF_ROOT_FIXED = 0
+URDF_ROOT_FREE = 1
+
+
+class aqs_urdf_options(ctypes.Structure):
+    """struct aqs_urdf_options, field for field (filled by aqs_urdf_options_init)."""
+
+    _fields_ = [
+        ("size", ctypes.c_uint32),
+        ("root", ctypes.c_int32),              # AQS_URDF_ROOT_*
+        ("collision", ctypes.c_int32),         # 1: <collision> primitives become shapes
+        ("finalize", ctypes.c_int32),          # 1: finalize after loading
+        ("physical_inertia", ctypes.c_int32),  # 1: unphysical link inertias are errors
+    ]
+
+
+urdf_options_p = ctypes.POINTER(aqs_urdf_options)
+
 
 class aqs_contact(ctypes.Structure):
     """struct aqs_contact, field for field."""
@@ -270,6 +289,25 @@ PROTOTYPES = {
                                          dout_or_null]),
     "aqs_joint_get_definition": (status_t, [linkage_p, ctypes.c_int32, int32_p, int32_p,
                                             int32_p, dout_or_null, dout_or_null, dout_or_null]),
+    # Names and joint limits
+    "aqs_body_set_name": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_char_p]),
+    "aqs_joint_set_name": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_char_p]),
+    "aqs_body_get_name": (status_t, [linkage_p, ctypes.c_int32, ctypes.POINTER(ctypes.c_char_p)]),
+    "aqs_joint_get_name": (status_t, [linkage_p, ctypes.c_int32,
+                                      ctypes.POINTER(ctypes.c_char_p)]),
+    "aqs_body_find": (status_t, [linkage_p, ctypes.c_char_p, int32_p]),
+    "aqs_joint_find": (status_t, [linkage_p, ctypes.c_char_p, int32_p]),
+    "aqs_joint_set_limits": (status_t, [linkage_p, ctypes.c_int32, ctypes.c_double,
+                                        ctypes.c_double, ctypes.c_double, ctypes.c_double]),
+    "aqs_joint_get_limits": (status_t, [linkage_p, ctypes.c_int32, double_p, double_p, double_p,
+                                        double_p]),
+    # Loading URDF models
+    "aqs_urdf_options_init": (None, [urdf_options_p]),
+    "aqs_urdf_supported": (ctypes.c_int32, []),
+    "aqs_linkage_load_urdf": (status_t, [linkage_p, ctypes.c_char_p, urdf_options_p]),
+    "aqs_linkage_load_urdf_buffer": (status_t, [linkage_p, ctypes.c_char_p, ctypes.c_size_t,
+                                                ctypes.c_char_p, urdf_options_p]),
+    "aqs_linkage_load_warnings": (ctypes.c_char_p, [linkage_p]),
     # Loads
     "aqs_linkage_set_gravity": (status_t, [linkage_p, din]),
     "aqs_body_set_force": (status_t, [linkage_p, ctypes.c_int32, din,
