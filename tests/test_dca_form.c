@@ -221,54 +221,52 @@ static void test_nearly_straight_chain(void **state)
  * k = 1e-12 and 2.3e-13 at mu = 1e-9 against the ABA's 1e-16; the
  * inverse-inertia form 1.3e-5 at k = 1e-12. The tolerances leave about two
  * orders of margin over the square-root form. */
-static void test_small_inertias(void **state)
+/* A spatial chain of n revolute links (axes alternating z, y) with link i of
+ * mass mass[i] and rotational inertia inertia[i] (3x3), random positions and a
+ * tilted gravity: the square-root DCA against the ABA, relative 2-norm < tol. */
+static void check_chain(int32_t n, const double *mass, const double *inertia, double tol, uint64_t *rng)
 {
     const double com[3] = {0.5, 0, 0}, g[3] = {0.2, -9.81, 0.4};
+    aqs_linkage *L = test_new_linkage();
+    double q[40], a[40], d[40];
+    int32_t i, prev = AQS_WORLD;
+    aqs_status st;
+    assert_true(n <= 40);
+    for (i = 0; i < n; i++) {
+        int32_t b;
+        assert_int_equal(aqs_body_add(L, mass[i], com, inertia + 9 * i, &b), AQS_OK);
+        test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, i ? 1.0 : 0.0, 0, 0, 0, i % 2 ? 1 : 0, i % 2 ? 0 : 1);
+        prev = b;
+        q[i] = test_uniform(rng, -1, 1);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(L, q, n), AQS_OK);
+    solve_both(L, a, d, n, &st);
+    assert_int_equal(st, AQS_OK);
+    assert_true(test_rel_diff(d, a, (size_t)n) < tol);
+    aqs_linkage_destroy(L);
+}
+
+static void test_small_inertias(void **state)
+{
+    double mass[40], inertia[9 * 40];
     uint64_t rng = 99;
     int32_t i;
     (void)state;
-    {
-        aqs_linkage *L = test_new_linkage();
-        double q[6], a[6], d[6];
-        int32_t prev = AQS_WORLD;
-        aqs_status st;
-        for (i = 0; i < 6; i++) {
-            const double k = 1e-12, Ip[9] = {k, 0, 0, 0, k, 0, 0, 0, k}, I[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
-            int32_t b;
-            assert_int_equal(aqs_body_add(L, i == 2 ? 0.75 : 1.0, com, i == 2 ? Ip : I, &b), AQS_OK);
-            test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, i ? 1.0 : 0.0, 0, 0, 0, i % 2 ? 1 : 0, i % 2 ? 0 : 1);
-            prev = b;
-            q[i] = test_uniform(&rng, -1, 1);
-        }
-        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
-        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-        assert_int_equal(aqs_linkage_set_positions(L, q, 6), AQS_OK);
-        solve_both(L, a, d, 6, &st);
-        assert_int_equal(st, AQS_OK);
-        assert_true(test_rel_diff(d, a, 6) < 1e-9);
-        aqs_linkage_destroy(L);
+    memset(inertia, 0, sizeof inertia);
+    for (i = 0; i < 6; i++) { /* body 2: 0.75 kg with inertia 1e-12 I */
+        mass[i] = i == 2 ? 0.75 : 1.0;
+        inertia[9 * i] = i == 2 ? 1e-12 : 0.01;
+        inertia[9 * i + 4] = inertia[9 * i + 8] = i == 2 ? 1e-12 : 0.1;
     }
-    {
-        aqs_linkage *L = test_new_linkage();
-        double q[40], a[40], d[40];
-        int32_t prev = AQS_WORLD;
-        aqs_status st;
-        for (i = 0; i < 40; i++) {
-            const double m = i < 20 ? 1000.0 : 1e-9, I[9] = {0.01 * m, 0, 0, 0, 0.1 * m, 0, 0, 0, 0.1 * m};
-            int32_t b;
-            assert_int_equal(aqs_body_add(L, m, com, I, &b), AQS_OK);
-            test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, i ? 1.0 : 0.0, 0, 0, 0, i % 2 ? 1 : 0, i % 2 ? 0 : 1);
-            prev = b;
-            q[i] = test_uniform(&rng, -1, 1);
-        }
-        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
-        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-        assert_int_equal(aqs_linkage_set_positions(L, q, 40), AQS_OK);
-        solve_both(L, a, d, 40, &st);
-        assert_int_equal(st, AQS_OK);
-        assert_true(test_rel_diff(d, a, 40) < 1e-10);
-        aqs_linkage_destroy(L);
+    check_chain(6, mass, inertia, 1e-9, &rng);
+    for (i = 0; i < 40; i++) { /* 20 links of 1000 kg, then 20 of 1e-9 kg */
+        mass[i] = i < 20 ? 1000.0 : 1e-9;
+        inertia[9 * i] = 0.01 * mass[i];
+        inertia[9 * i + 4] = inertia[9 * i + 8] = 0.1 * mass[i];
     }
+    check_chain(40, mass, inertia, 1e-10, &rng);
 }
 
 int main(void)
