@@ -14,6 +14,7 @@
 #include "dca.h"
 #include "linkage.h"
 #include "model.h"
+#include "stale.h"
 #include "totalacc.h"
 #include "update.h"
 
@@ -220,7 +221,7 @@ AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *L, int32_t solver)
     }
     if (solver != L->exact_solver) {
         L->exact_solver = solver;
-        L->s.valid = 0;
+        stale_settings(L);
     }
     return AQS_OK;
 }
@@ -339,25 +340,28 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
     nv = joint_nv(type);
     if (L->nq > INT32_MAX - 8 || L->njoints == INT32_MAX - 1)
         return lk_fail(L, AQS_ENOMEM, "%s: too many joints", fn);
-    /* Reserve everything first so that a failure changes nothing. */
+    /* Reserve everything first so that a failure changes nothing. q and tau
+     * exist from the first joint on, fixed ones included: L->q + offset is
+     * then never arithmetic on NULL. */
     {
         joint_def *nj = NULL;
         double *nqa = NULL, *nta = NULL;
         size_t jcap = (size_t)L->joint_cap, qcap = (size_t)L->q_cap, vcap = (size_t)L->v_cap;
-        if (L->njoints == L->joint_cap) {
+        int grow_j = L->njoints == L->joint_cap, grow_q = L->nq + nq > L->q_cap || !L->q,
+            grow_v = L->nv + nv > L->v_cap || !L->tau;
+        if (grow_j) {
             jcap = jcap ? 2 * jcap : 16;
             nj = grown(L, L->joints, (size_t)L->njoints, jcap, sizeof *nj);
         }
-        if (L->nq + nq > L->q_cap) {
+        if (grow_q) {
             qcap = qcap ? 2 * qcap + (size_t)nq : 64;
             nqa = grown(L, L->q, (size_t)L->nq, qcap, sizeof(double));
         }
-        if (L->nv + nv > L->v_cap) {
+        if (grow_v) {
             vcap = vcap ? 2 * vcap + (size_t)nv : 64;
             nta = grown(L, L->tau, (size_t)L->nv, vcap, sizeof(double));
         }
-        if ((L->njoints == L->joint_cap && !nj) || (L->nq + nq > L->q_cap && !nqa) ||
-            (L->nv + nv > L->v_cap && !nta)) {
+        if ((grow_j && !nj) || (grow_q && !nqa) || (grow_v && !nta)) {
             lk_free(L, nj);
             lk_free(L, nqa);
             lk_free(L, nta);
@@ -428,7 +432,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     for (n = 0; n < L->t.nnodes; n++)
         if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
     update_all_poses(L);
-    update_mark_all(L);
+    stale_tree(L);
     /* The DCA coefficients only when the DCA is the exact solver, or when
      * nothing can move (no tree node: the solve takes the DCA path, and its
      * few bytes are allocated here rather than in a solve). Tolerances and
@@ -440,7 +444,6 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         }
     }
     L->finalized = 1;
-    L->solved = 0;
     return AQS_OK;
 }
 
@@ -492,8 +495,7 @@ AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *L, const double gravity[
     CHECK_LINKAGE(L);
     if ((st = check_vec(L, "aqs_linkage_set_gravity", "gravity", gravity, 3)) != AQS_OK) return st;
     memcpy(L->gravity, gravity, sizeof L->gravity);
-    L->gravity_dirty = 1;
-    L->s.valid = 0;
+    stale_gravity(L);
     return AQS_OK;
 }
 
@@ -517,8 +519,7 @@ AQS_API aqs_status aqs_body_set_force(aqs_linkage *L, int32_t body, const double
         L->load_slot[body] = L->nloaded;
         L->loaded_bodies[L->nloaded++] = body;
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
     return AQS_OK;
 }
 
@@ -531,8 +532,7 @@ static void remove_load(aqs_linkage *L, int32_t body)
     L->load_slot[last] = slot;
     L->load_slot[body] = -1;
     memset(&L->loads[body], 0, sizeof(body_load));
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
 }
 
 AQS_API aqs_status aqs_body_clear_force(aqs_linkage *L, int32_t body)
@@ -559,10 +559,9 @@ AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *L)
             if (L->tau[jd->voff + k] != 0.0) actuated = 1;
         if (!actuated) continue;
         memset(L->tau + jd->voff, 0, sizeof(double) * (size_t)nv);
-        if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[j]]);
+        stale_joint_force(L, L->finalized ? L->t.node_of_eff[L->m.eff_of_joint[j]] : -1);
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
     return AQS_OK;
 }
 
@@ -580,8 +579,7 @@ AQS_API aqs_status aqs_joint_set_force(aqs_linkage *L, int32_t joint, const doub
     if (nv == 0) return AQS_OK;
     if ((st = check_vec(L, fn, "tau", tau, nv)) != AQS_OK) return st;
     memcpy(L->tau + L->joints[joint].voff, tau, sizeof(double) * (size_t)nv);
-    if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[joint]]);
-    L->s.valid = 0;
+    stale_joint_force(L, L->finalized ? L->t.node_of_eff[L->m.eff_of_joint[joint]] : -1);
     return AQS_OK;
 }
 
@@ -607,6 +605,13 @@ static aqs_status check_outputs(aqs_linkage *L, const char *fn)
     if (s->all) {
         for (i = 0; i < L->njoints && st == AQS_OK; i++) st = check_joint_outputs(L, fn, i);
     } else {
+        /* An adaptive solve orders the joints by A (MATH.md §6): overflowed
+         * values make the order and the bound meaningless (an infinite relative
+         * bound over zero accelerations is a true statement, a NaN is not). */
+        if (isnan(s->bound) || !isfinite(s->sum) || !isfinite(s->a_root))
+            return lk_fail(L, AQS_ENUMERIC,
+                           "%s: the error bound came out non-finite (bound = %g, queued sum = %g): "
+                           "the loads are too large for double precision", fn, s->bound, s->sum);
         for (i = 0; i < s->nprocessed && st == AQS_OK; i++)
             st = check_joint_outputs(L, fn, L->m.eff_joint[L->t.nodes[s->processed[i]].joint]);
     }
@@ -636,23 +641,24 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
     if (exact_by_aba(L) || fb || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
     if (exact_by_aba(L) || fb) {
         if ((st = aba_solve(L)) != AQS_OK) {
-            L->solved = 0;
-            L->s.valid = 0;
+            stale_solve_failed(L);
             return st;
         }
         L->exact_by_aba = 1;
     } else {
         /* allocated already by finalize or by the setters that lead here */
         if ((st = dca_enable(L, fn)) != AQS_OK) return st;
-        if ((st = update_coefficients(L)) != AQS_OK) return st;
+        if ((st = update_coefficients(L)) != AQS_OK) {
+            stale_solve_failed(L); /* the results would be the previous solve's */
+            return st;
+        }
         adaptive_solve(L);
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
-        L->solved = 0;
-        L->s.valid = 0;
+        stale_solve_failed(L);
         return st;
     }
-    L->solved = 1;
+    stale_solve_done(L);
     if (fb) {
         L->fb_left--;
         L->fb_last = 1;
@@ -732,8 +738,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         memcpy(msg, L->error, sizeof msg);
         copy_moved_positions(L, L->q, L->q_saved);
         update_all_poses(L);
-        update_mark_all(L);
-        L->loads_dirty = 1;
+        stale_positions(L, -1);
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
@@ -752,11 +757,11 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
         return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
     if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
         if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
-        update_mark_all(L);
+        stale_tree(L);
     }
     L->s.metric = metric;
     L->s.eps = eps;
-    L->s.valid = 0;
+    stale_settings(L);
     L->fb_left = 0;
     adaptive_predict_clear(L); /* made for the former measure */
     return AQS_OK;
@@ -772,8 +777,7 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
         return lk_fail(L, AQS_EINVAL, "%s: max_joints = %d must be >= 0", fn, (int)max_joints);
     if (max_joints > 0 && !L->t.tdata && L->t.nnodes > 0) {
         if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
-        update_mark_all(L);
-        L->s.valid = 0;
+        stale_tree(L);
     }
     L->s.max_computed = max_joints;
     L->fb_left = 0;
@@ -836,7 +840,7 @@ AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
     if (kind != AQS_JOINT_BOUND_HEAP_TOP && kind != AQS_JOINT_BOUND_SUM)
         return lk_fail(L, AQS_EINVAL, "%s: kind = %d is not an AQS_JOINT_BOUND_* value", fn, (int)kind);
     L->s.joint_bound = kind;
-    L->s.valid = 0;
+    stale_settings(L);
     adaptive_predict_clear(L);
     return AQS_OK;
 }
@@ -855,10 +859,7 @@ AQS_API aqs_status aqs_linkage_refine(aqs_linkage *L, double eps)
     if (L->s.all || eps >= L->s.bound) return AQS_OK;
     adaptive_refine(L, eps);
     L->s.eps = eps;
-    if ((st = check_outputs(L, fn)) != AQS_OK) {
-        L->solved = 0;
-        L->s.valid = 0;
-    }
+    if ((st = check_outputs(L, fn)) != AQS_OK) stale_solve_failed(L);
     return st;
 }
 
@@ -938,14 +939,14 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
     if (!L->finalized) return;
     if (joint < 0) {
         update_all_poses(L);
-        update_mark_all(L);
+        stale_positions(L, -1);
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
         update_poses_from_joint(L, e);
-        update_mark(L, L->t.node_of_eff[e]);
+        stale_positions(L, L->t.node_of_eff[e]);
+    } else {
+        stale_loads(L); /* a fixed joint moves nothing; as for any position change */
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
 }
 
 AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, size_t n)

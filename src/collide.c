@@ -7,6 +7,7 @@
 #include "aqs.h"
 #include "collide.h"
 #include "linkage.h"
+#include "stale.h"
 
 collision *collide_state(aqs_linkage *L)
 {
@@ -23,10 +24,7 @@ collision *collide_state(aqs_linkage *L)
 static void contacts_changed(aqs_linkage *L)
 {
     broadphase_forget(L);
-    if (L->col && L->col->stiffness > 0.0) {
-        L->loads_dirty = 1;
-        L->s.valid = 0; /* the loads changed: no refine of the last solve */
-    }
+    if (L->col && L->col->stiffness > 0.0) stale_loads(L); /* penalty forces */
 }
 
 void collide_free(aqs_linkage *L)
@@ -94,18 +92,15 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
     }
     c->shapes[c->nshapes] = *s;
     shape_bound(&c->shapes[c->nshapes]);
-    c->nshapes++;
-    broadphase_reset(L); /* rebuilt at the next query */
     if (L->finalized && c->stiffness > 0.0) {
-        /* penalty contact: build now, so that solving never allocates */
-        aqs_status st = broadphase_build(L, fn);
-        if (st != AQS_OK) {
-            c->nshapes--;
-            (void)broadphase_build(L, fn); /* as before, if memory allows; else at the next query */
-            return st;
-        }
-        L->loads_dirty = 1;
-        L->s.valid = 0;
+        /* penalty contact: build now, so that solving never allocates; a
+           failure keeps the former shapes' data, which solving needs */
+        aqs_status st = broadphase_rebuild(L, c->nshapes + 1, fn);
+        if (st != AQS_OK) return st;
+        stale_loads(L);
+    } else {
+        c->nshapes++;
+        broadphase_reset(L); /* rebuilt at the next query */
     }
     if (out) *out = c->nshapes - 1;
     return AQS_OK;
@@ -337,8 +332,7 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stif
     if (c->nshapes > 0 && (st = broadphase_build(L, fn)) != AQS_OK) return st;
     if (c->stiffness != stiffness) {
         c->stiffness = stiffness;
-        L->loads_dirty = 1;
-        L->s.valid = 0;
+        stale_loads(L);
     }
     return AQS_OK;
 }

@@ -9,6 +9,7 @@
 
 #include "dense.h"
 #include "model.h"
+#include "stale.h"
 #include "update.h"
 
 /* Phi is stored block-major: the 6x6 block (i, j) of an nh-handle node is
@@ -53,8 +54,7 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     for (n = 0; n < t->nnodes; n++)
         if (t->nodes[n].joint < 0) dca_leaf_phi(L, n);
     /* every b and internal node from scratch, loads and gravity included */
-    t->all_dirty = 1;
-    L->loads_dirty = L->gravity_dirty = 1;
+    stale_tree(L);
     return AQS_OK;
 }
 

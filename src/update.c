@@ -6,6 +6,7 @@
 #include "collide.h"
 #include "dca.h"
 #include "dense.h"
+#include "stale.h"
 #include "totalacc.h"
 
 void update_leaf_poses(aqs_linkage *L, int32_t n)
@@ -129,8 +130,6 @@ void update_mark(aqs_linkage *L, int32_t n)
     }
 }
 
-void update_mark_all(aqs_linkage *L) { L->t.all_dirty = 1; }
-
 /* Refresh a leaf's b and mark its ancestors. While the whole tree is stale
  * (all_dirty: after an exact step by the articulated-body algorithm, which
  * needs only the composites' loads) b is left to the full update, which
@@ -149,7 +148,7 @@ void update_loads(aqs_linkage *L)
     if (L->t.nnodes == 0) return;
     if (L->gravity_dirty) {
         refresh_leaf(L, L->t.leaf_of_comp[m->ncomp]);
-        L->gravity_dirty = 0;
+        stale_gravity_fresh(L);
     }
     if (!L->loads_dirty) return;
     for (i = 0; i < m->nloaded_comps; i++) {
@@ -174,7 +173,7 @@ void update_loads(aqs_linkage *L)
     }
     if (L->col && L->col->stiffness > 0.0) broadphase_penalty(L); /* contact forces */
     for (i = 0; i < m->nloaded_comps; i++) refresh_leaf(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
-    L->loads_dirty = 0;
+    stale_loads_fresh(L);
 }
 
 /* Sort node indices ascending (children before parents: a child's index
@@ -229,7 +228,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     if (t->nnodes == 0) return AQS_OK;
     t->factors_updated = 0;
     if (t->all_dirty) {
-        L->loads_dirty = L->gravity_dirty = 1;
+        stale_loads_all(L);
         update_loads(L); /* the composites' loads; marks are superseded by the full pass */
         /* every leaf's b (the world leaf's from gravity): those refreshed
          * while the tree was stale were skipped (refresh_leaf) */
@@ -245,7 +244,7 @@ aqs_status update_coefficients(aqs_linkage *L)
         t->nodes_updated = t->ndirty;
     }
     if (st != AQS_OK) return st; /* the marks stay: a later update retries */
-    t->all_dirty = 0;
+    stale_tree_fresh(L);
     t->ndirty = 0;
     if (++t->epoch == 0) { /* wrapped: clear the stamps once */
         memset(t->stamp, 0, sizeof(uint32_t) * (size_t)t->nnodes);

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "adaptive.h"
+#include "stale.h"
 #include "linkage.h"
 #include "totalacc.h"
 #include "update.h"
@@ -781,7 +782,7 @@ static void test_lazy_equals_eager(void **state)
         }
     /* the full recomputation: every factor, the predicted set emptied */
     adaptive_predict_clear(L);
-    update_mark_all(L);
+    stale_tree(L);
     assert_int_equal(update_coefficients(L), AQS_OK);
     take_snapshot(L, &full);
     per_node_diff(L, &lazy, &full, stale, &dphi, &dgram);
