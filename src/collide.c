@@ -317,6 +317,32 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *L, int32_t
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_get_query_stats(const aqs_linkage *cL, aqs_collision_stats *stats)
+{
+    static const char fn[] = "aqs_linkage_get_query_stats";
+    aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
+    const collision *c;
+    aqs_collision_stats full;
+    uint32_t size;
+    if (!L) return AQS_EINVAL;
+    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
+    size = stats->size;
+    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    memset(&full, 0, sizeof full);
+    full.size = size;
+    if ((c = L->col) != NULL) {
+        full.nodes_refit = c->nodes_refit;
+        full.volume_tests = c->volume_tests;
+        full.narrow_tests = c->narrow_tests;
+        full.nodes_skipped = c->nodes_skipped;
+        full.certs_reused = c->certs_reused;
+        full.certs_made = c->certs_made;
+        full.near_tests = c->near_tests;
+    }
+    memcpy(stats, &full, size < sizeof full ? size : sizeof full);
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stiffness)
 {
     static const char fn[] = "aqs_linkage_set_contact_stiffness";

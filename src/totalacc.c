@@ -29,6 +29,7 @@
 
 #include "dca.h"
 #include "dense.h"
+#include "invariant.h"
 #include "pool.h"
 
 /* Height of the node whose principal joint is handle h of node n: an
@@ -239,6 +240,8 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     const int32_t *posA = row_starts(t, C->a), *posB = row_starts(t, C->b);
     int64_t offA = 0, offB = 0, off;
 
+    /* the factor's shape: its rows fit the scratch (at most 6 + 6 + 6 reflected) */
+    AQS_ASSERT(p <= 18 && cols <= cmax && A->trows <= 6 * A->nh + 1 && B->trows <= 6 * B->nh + 1);
     C->trows = 0;
     if (A->trows + B->trows + kd == 0) return;
     for (c = 0; c < nh; c++) posC[permC[c]] = c;
@@ -288,6 +291,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         off += cols - j;
         rowpos[r++] = j;
     }
+    AQS_ASSERT(r <= cols && off <= (int64_t)cols * (cols + 1) / 2); /* packed triangle */
     C->trows = r;
 }
 

@@ -6,6 +6,7 @@
 #include "collide.h"
 #include "dca.h"
 #include "dense.h"
+#include "invariant.h"
 #include "stale.h"
 #include "totalacc.h"
 
@@ -45,6 +46,7 @@ void update_node_poses(aqs_linkage *L, int32_t n)
         if (i != C->ka) P[ci++] = PA[i];
     for (i = 0; i < B->nh; i++)
         if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+    AQS_ASSERT(ci == C->nh && C->nh == A->nh + B->nh - 2); /* the joined handles drop out */
     if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
@@ -128,6 +130,7 @@ void update_mark(aqs_linkage *L, int32_t n)
         t->stamp[n] = t->epoch;
         t->dirty[t->ndirty++] = n;
     }
+    AQS_ASSERT(t->ndirty <= t->nnodes); /* each node once per epoch */
 }
 
 /* Refresh a leaf's b and mark its ancestors. While the whole tree is stale
@@ -204,6 +207,13 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
 {
     const node *nd = &L->t.nodes[n];
     if (nd->joint < 0) return AQS_OK;
+    /* children before parents: the update order relies on it */
+    AQS_ASSERT(nd->a < n && nd->b < n && (nd->parent < 0 || nd->parent > n));
+    AQS_ASSERT(L->t.nodes[nd->a].parent == n && L->t.nodes[nd->b].parent == n);
+    /* the node's blocks inside the pooled coefficients */
+    AQS_ASSERT(nd->phi >= 0 && nd->phi + 36 * (int64_t)nd->nh * nd->nh <= L->t.ndata);
+    AQS_ASSERT(nd->xf >= 0 && nd->xf + 6 * (int64_t)nd->nh <= L->t.ndata);
+    AQS_ASSERT(nd->nh <= L->t.max_handles);
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
@@ -240,6 +250,7 @@ aqs_status update_coefficients(aqs_linkage *L)
         update_loads(L);
         /* Children first: a child's index is below its parent's. */
         sort_nodes(t->dirty, t->ndirty, t->nnodes - 1, t->dirty_tmp);
+        AQS_ASSERT(t->ndirty < 2 || t->dirty[0] < t->dirty[t->ndirty - 1]);
         for (k = 0; k < t->ndirty && st == AQS_OK; k++) st = update_node(L, t->dirty[k]);
         t->nodes_updated = t->ndirty;
     }
