@@ -1,7 +1,6 @@
 /* api.c -- the public entry points: argument checks, phases, status codes
  * and error messages. The numerical work is in the other files. */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +9,7 @@
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
+#include "check.h"
 #include "collide.h"
 #include "dca.h"
 #include "linkage.h"
@@ -43,15 +43,6 @@ AQS_API const char *aqs_status_string(aqs_status status)
     }
 }
 
-aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(L->error, sizeof L->error, fmt, ap);
-    va_end(ap);
-    return status;
-}
-
 /* ---------------------------------------------------------------- helpers */
 
 static int finite_n(const double *v, int n, int *bad)
@@ -75,16 +66,6 @@ static int finite_n(const double *v, int n, int *bad)
         if (!(p)) return lk_fail((L), AQS_EINVAL, "%s: %s is NULL", fn, #p);                   \
     } while (0)
 
-static aqs_status check_vec(aqs_linkage *L, const char *fn, const char *name, const double *v,
-                            int n)
-{
-    int bad;
-    if (!v) return lk_fail(L, AQS_EINVAL, "%s: %s is NULL", fn, name);
-    if (!finite_n(v, n, &bad))
-        return lk_fail(L, AQS_EINVAL, "%s: %s[%d] = %g is not finite", fn, name, bad, v[bad]);
-    return AQS_OK;
-}
-
 static aqs_status check_body(aqs_linkage *L, const char *fn, int32_t body)
 {
     if (body < 0 || body >= L->nbodies)
@@ -101,13 +82,6 @@ static aqs_status check_joint(aqs_linkage *L, const char *fn, int32_t joint)
     return AQS_OK;
 }
 
-static aqs_status need_finalized(aqs_linkage *L, const char *fn)
-{
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
-    return AQS_OK;
-}
-
 static aqs_status need_building(aqs_linkage *L, const char *fn)
 {
     if (L->finalized)
@@ -117,7 +91,7 @@ static aqs_status need_building(aqs_linkage *L, const char *fn)
 
 static aqs_status need_solved(aqs_linkage *L, const char *fn)
 {
-    aqs_status st = need_finalized(L, fn);
+    aqs_status st = check_finalized(L, fn);
     if (st == AQS_OK && !L->solved)
         return lk_fail(L, AQS_ESTATE, "%s: nothing solved yet (call aqs_linkage_solve or aqs_linkage_step)", fn);
     return st;
@@ -327,9 +301,7 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
                        "%s: a free joint must have parent AQS_WORLD, got parent = %d", fn, (int)parent);
     if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK) return st;
     if ((st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK) return st;
-    qn = sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
-    if (fabs(qn - 1.0) > 1e-6)
-        return lk_fail(L, AQS_EINVAL, "%s: quat has norm %.17g, not 1 (tolerance 1e-6)", fn, qn);
+    if ((st = check_unit_quat(L, fn, "quat", quat, &qn)) != AQS_OK) return st;
     if (joint_uses_axis(type)) {
         if ((st = check_vec(L, fn, "axis", axis, 3)) != AQS_OK) return st;
         an = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
@@ -479,7 +451,7 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *cL, int32_t *no
     aqs_linkage *L = (aqs_linkage *)cL;
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, "aqs_linkage_get_tree_stats")) != AQS_OK) return st;
+    if ((st = check_finalized(L, "aqs_linkage_get_tree_stats")) != AQS_OK) return st;
     if (nodes) *nodes = L->t.nnodes;
     if (height) *height = L->t.height;
     if (mean_handles) *mean_handles = L->t.mean_handles;
@@ -673,7 +645,7 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
     static const char fn[] = "aqs_linkage_solve";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     return solve(L, fn);
 }
 
@@ -714,7 +686,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     aqs_status st;
     int32_t before, before_f;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
     if ((st = solve(L, fn)) != AQS_OK) return st;
@@ -750,7 +722,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     static const char fn[] = "aqs_linkage_set_tolerance";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_JOINT)
         return lk_fail(L, AQS_EINVAL, "%s: metric = %d is not an AQS_METRIC_* value", fn, (int)metric);
     if (!isfinite(eps) || eps < 0.0)
@@ -772,7 +744,7 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
     static const char fn[] = "aqs_linkage_set_max_computed";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (max_joints < 0)
         return lk_fail(L, AQS_EINVAL, "%s: max_joints = %d must be >= 0", fn, (int)max_joints);
     if (max_joints > 0 && !L->t.tdata && L->t.nnodes > 0) {
@@ -810,7 +782,7 @@ AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *L, double margin)
     static const char fn[] = "aqs_linkage_set_prediction";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(margin) || (margin != 0.0 && margin < 1.0))
         return lk_fail(L, AQS_EINVAL, "%s: margin = %g must be 0 (off) or a finite number >= 1", fn,
                        margin);
@@ -825,7 +797,7 @@ AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *cL, double *mar
     aqs_linkage *L = (aqs_linkage *)cL;
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, margin);
     *margin = L->s.margin;
     return AQS_OK;
@@ -836,7 +808,7 @@ AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
     static const char fn[] = "aqs_linkage_set_joint_bound";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (kind != AQS_JOINT_BOUND_HEAP_TOP && kind != AQS_JOINT_BOUND_SUM)
         return lk_fail(L, AQS_EINVAL, "%s: kind = %d is not an AQS_JOINT_BOUND_* value", fn, (int)kind);
     L->s.joint_bound = kind;
@@ -928,9 +900,12 @@ static aqs_status check_joint_position(aqs_linkage *L, const char *fn, int32_t j
     if (r > 0)
         return lk_fail(L, AQS_EINVAL, "%s: position value %d of joint %d is %g, not finite", fn,
                        r - 1, (int)j, q[r - 1]);
-    if (r < 0)
-        return lk_fail(L, AQS_EINVAL, "%s: the quaternion of joint %d is not unit (tolerance 1e-6)",
-                       fn, (int)j);
+    if (r < 0) { /* the message of every unit-quaternion check */
+        char name[48];
+        double norm;
+        snprintf(name, sizeof name, "the quaternion of joint %d", (int)j);
+        return check_unit_quat(L, fn, name, q + (L->joints[j].type == AQS_JOINT_FREE ? 3 : 0), &norm);
+    }
     return AQS_OK;
 }
 
@@ -1080,7 +1055,7 @@ AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *cL, int32_t body, 
     pose P;
     CHECK_LINKAGE(L);
     if ((st = check_body(L, fn, body)) != AQS_OK) return st;
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, pos);
     CHECK_PTR(L, fn, quat);
     update_body_pose_world(L, body, &P);
@@ -1095,7 +1070,7 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, doubl
     aqs_status st;
     int32_t b;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, poses);
     if (n < 7 * (size_t)L->nbodies)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);

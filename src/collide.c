@@ -5,11 +5,13 @@
 #include <string.h>
 
 #include "aqs.h"
+#include "check.h"
 #include "collide.h"
 #include "linkage.h"
 #include "stale.h"
 
-collision *collide_state(aqs_linkage *L)
+/* Get (creating on first use) the collision state. NULL on allocation failure. */
+static collision *collide_state(aqs_linkage *L)
 {
     if (!L->col) {
         L->col = lk_calloc(L, 1, sizeof(collision));
@@ -60,17 +62,10 @@ static aqs_status check_placement(aqs_linkage *L, const char *fn, const double p
 {
     int i;
     double q[4], len;
-    if (!pos) return lk_fail(L, AQS_EINVAL, "%s: pos is NULL", fn);
-    if (!quat) return lk_fail(L, AQS_EINVAL, "%s: quat is NULL", fn);
-    for (i = 0; i < 3; i++)
-        if (!isfinite(pos[i]))
-            return lk_fail(L, AQS_EINVAL, "%s: pos[%d] = %g is not finite", fn, i, pos[i]);
-    for (i = 0; i < 4; i++)
-        if (!isfinite(quat[i]))
-            return lk_fail(L, AQS_EINVAL, "%s: quat[%d] = %g is not finite", fn, i, quat[i]);
-    len = quat_norm(quat);
-    if (!(fabs(len - 1.0) <= 1e-6))
-        return lk_fail(L, AQS_EINVAL, "%s: quat has norm %.17g, not unit (tolerance 1e-6)", fn, len);
+    aqs_status st;
+    if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK || (st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK ||
+        (st = check_unit_quat(L, fn, "quat", quat, &len)) != AQS_OK)
+        return st;
     for (i = 0; i < 4; i++) q[i] = quat[i] / len;
     pose_from_quat(pos, q, P);
     return AQS_OK;
@@ -261,8 +256,8 @@ AQS_API aqs_status aqs_linkage_set_collide_joined(aqs_linkage *L, int32_t enable
 
 static aqs_status prepare(aqs_linkage *L, const char *fn)
 {
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    aqs_status st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!L->col || L->col->nshapes == 0) return AQS_OK;
     return broadphase_build(L, fn);
 }
@@ -349,8 +344,7 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stif
     collision *c;
     aqs_status st;
     if (!L) return AQS_EINVAL;
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(stiffness) || stiffness < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: stiffness = %g must be finite and >= 0", fn, stiffness);
     if (!L->col && stiffness == 0.0) return AQS_OK; /* the default: nothing to store */

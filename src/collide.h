@@ -64,8 +64,6 @@ typedef struct collision {
     int32_t certs_reused, certs_made, near_tests; /* internal (tests, bench) */
 } collision;
 
-/* Get (creating on first use) the collision state. NULL on allocation failure. */
-collision *collide_state(aqs_linkage *L);
 void collide_free(aqs_linkage *L);
 /* Forget the built data (shapes changed). */
 void broadphase_reset(aqs_linkage *L);

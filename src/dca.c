@@ -42,6 +42,8 @@ static void symmetrize_blocks(double *phi, int32_t nh, int diagonal)
     }
 }
 
+static void dca_leaf_phi(aqs_linkage *L, int32_t n);
+
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
     tree *t = &L->t;
@@ -58,7 +60,8 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     return AQS_OK;
 }
 
-void dca_leaf_phi(aqs_linkage *L, int32_t n)
+/* Leaf Phi (constant after finalize; the world leaf's is zero). */
+static void dca_leaf_phi(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     node *nd = &t->nodes[n];
@@ -352,7 +355,9 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
     for (i = 0; i < rows; i++) out[i] = t->scratch[72 * C->nh + (int64_t)i * d + r];
 }
 
-void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
+/* out = W h for internal node n (W = V - V S U, applied through the stored
+ * Cholesky factor of T; zero for a free joint). */
+static void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6])
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];

@@ -10,17 +10,12 @@
  * articulated-body algorithm never needs them. Marks every node stale.
  * AQS_OK or AQS_ENOMEM (message naming fn). */
 aqs_status dca_enable(aqs_linkage *L, const char *fn);
-/* Leaf Phi (constant after finalize; the world leaf's is zero). */
-void dca_leaf_phi(aqs_linkage *L, int32_t n);
 /* Leaf b from the composite's external load (world leaf: from gravity). */
 void dca_leaf_b(aqs_linkage *L, int32_t n);
 /* Internal node: X, W, U, rho, gamma, S, M, Phi, b from its children and
  * the principal joint's position and force. Returns 0, or -1 when the
  * articulated inertia is numerically singular. */
 int dca_node_update(aqs_linkage *L, int32_t n);
-/* out = W h for internal node n (W = V - V S U, applied through the stored
- * Cholesky factor of T; zero for a free joint). */
-void dca_apply_W(const aqs_linkage *L, int32_t n, const double h[6], double out[6]);
 /* Right after dca_node_update(L, n), from the products it left in the
  * scratch (valid until the next node update): out (6 nh) = M W g for a
  * 6-vector g, i.e. the handle part of g^T [W M^T], without forming W. */

@@ -180,7 +180,8 @@ int dense_cholesky6(const double *A, double *C)
     return 0;
 }
 
-void dense_cholesky6_inverse(const double *C, double *V)
+/* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6). */
+static void dense_cholesky6_inverse(const double *C, double *V)
 {
     double Ci[36];
     int i, j, k;

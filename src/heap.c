@@ -11,8 +11,6 @@ void heap_init(heap *h, double *key, int32_t *item, int32_t capacity)
     h->capacity = capacity;
 }
 
-void heap_clear(heap *h) { h->size = 0; }
-
 int heap_push(heap *h, double key, int32_t item)
 {
     int32_t i;

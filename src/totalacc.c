@@ -174,17 +174,6 @@ static int32_t reflected_rows(const tree *t, int32_t x)
     return r;
 }
 
-/* Row r of node x's packed factor (at packed offset off) into full (cols_x
- * entries, zeros left of its start); returns the offset of row r + 1. */
-static int64_t unpack_row(const tree *t, int32_t x, int32_t r, int64_t off, double *full)
-{
-    const int32_t *pos = row_starts(t, x);
-    int32_t cx = 6 * t->nodes[x].nh + 1, len = cx - pos[r];
-    memset(full, 0, sizeof(double) * (size_t)pos[r]);
-    memcpy(full + pos[r], t->tdata + t->nodes[x].T + off, sizeof(double) * (size_t)len);
-    return off + len;
-}
-
 /* Place the rows of child x's factor from row `from` (at packed offset off)
  * on in R (C's cols x cols rows, row j starting at column j): a row starting
  * at the child's column q goes to C's row for q (map). The constant-only rows
@@ -330,12 +319,4 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
         sum += s * s;
     }
     return sum;
-}
-
-void totalacc_unpack(const aqs_linkage *L, int32_t n, double *full)
-{
-    const tree *t = &L->t;
-    int32_t cols = 6 * t->nodes[n].nh + 1, r;
-    int64_t off = 0;
-    for (r = 0; r < t->nodes[n].trows; r++) off = unpack_row(t, n, r, off, full + (int64_t)r * cols);
 }

@@ -4,6 +4,7 @@
  * recomputation, eps = 0 reproduces the exact trajectory, and the work per
  * step is local (counters, not time). */
 #include "testutil.h"
+#include "factor.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -669,7 +670,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
         {
             double *T = malloc(sizeof(double) * (size_t)(c * c));
             assert_non_null(T);
-            totalacc_unpack(L, n, T);
+            test_unpack_factor(L, n, T);
             for (i = 0; i < c; i++)
                 for (j = 0; j < c; j++) {
                     double sum = 0;
