@@ -341,6 +341,7 @@ check-fuzz: | $(BUILD_PREREQ)
 	else rm -f build/.fuzz-probe; \
 	    $(MAKE) --no-print-directory $(FUZZ) build/fuzz/test_stale_ubsan && \
 	    echo "== build/fuzz/test_stale_ubsan" && build/fuzz/test_stale_ubsan && \
-	    echo "== $(FUZZ) -runs=$(FUZZ_RUNS) -seed=1" && \
-	    $(FUZZ) -runs=$(FUZZ_RUNS) -seed=1 -max_len=1024 -print_final_stats=1 2>&1 | tail -n 12 \
-	    && test $${PIPESTATUS[0]} -eq 0; fi
+	    echo "== $(FUZZ) -runs=$(FUZZ_RUNS) -seed=1 (log: build/fuzz/check.log)" && \
+	    if (cd build/fuzz && ./aqs_fuzz -runs=$(FUZZ_RUNS) -seed=1 -max_len=1024 \
+	            -print_final_stats=1 > check.log 2>&1); then grep -a '^Done\|^stat::' build/fuzz/check.log; \
+	    else tail -n 60 build/fuzz/check.log; echo "check-fuzz: FAILED (reproducer crash-* in build/fuzz)"; exit 1; fi; fi
