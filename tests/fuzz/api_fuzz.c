@@ -92,7 +92,13 @@ typedef struct {
     double mean_handles, fallback, prediction;
     double q[MAXQ], qdd[MAXQ], f[6 * MAXB], poses[7 * MAXB];
     aqs_solve_stats stats;
+    aqs_collision_stats cstats2;
     int32_t computed[MAXB];
+    double inertial[MAXB][13];         /* mass, com, inertia as stored */
+    double definition[MAXB][10];       /* pos, quat, axis */
+    int32_t kinds[MAXB][3];            /* type, parent, child */
+    size_t ncontacts;
+    aqs_contact contacts[16];
 } observation;
 
 /* Every getter, each into a zeroed observation (NaN-filled outputs compare
@@ -116,6 +122,18 @@ static void observe(aqs_linkage *L, observation *o)
     o->st[k++] = aqs_linkage_get_body_poses_world(L, o->poses, 7 * MAXB);
     o->stats.size = sizeof o->stats;
     o->st[k++] = aqs_linkage_get_stats(L, &o->stats);
+    /* a lazy query (the same on both linkages; it updates the caches and the
+       statistics, read after it) */
+    o->st[k++] = aqs_linkage_collide(L, AQS_COLLIDE_LAZY, o->contacts, 16, &o->ncontacts);
+    o->cstats2.size = sizeof o->cstats2;
+    o->st[k++] = aqs_linkage_get_query_stats(L, &o->cstats2);
+    for (j = 0; j < nb && j < MAXB; j++)
+        o->st[k] |= aqs_body_get_inertial(L, j, &o->inertial[j][0], &o->inertial[j][1], &o->inertial[j][4]);
+    k++;
+    for (j = 0; j < nj && j < MAXB; j++)
+        o->st[k] |= aqs_joint_get_definition(L, j, &o->kinds[j][0], &o->kinds[j][1], &o->kinds[j][2],
+                                             &o->definition[j][0], &o->definition[j][3], &o->definition[j][7]);
+    k++;
     for (j = 0; j < nj && j < MAXB; j++) {
         o->st[k] |= aqs_joint_get_layout(L, j, &o->layout[j][0], &o->layout[j][1], &o->layout[j][2],
                                          &o->layout[j][3]);
@@ -123,9 +141,10 @@ static void observe(aqs_linkage *L, observation *o)
     }
 }
 
-static void compare(aqs_linkage *S, aqs_linkage *T, const char *call, long step)
+static void compare(aqs_linkage *S, aqs_linkage *T, injector *inj, const char *call, long step)
 {
     static observation a, b;
+    inj->fail_at = 0; /* observing never fails */
     observe(S, &a);
     observe(T, &b);
     if (memcmp(&a, &b, sizeof a) != 0) {
@@ -363,7 +382,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         st = apply(S, &c);
         inj.fail_at = 0;
         if (st == AQS_OK && apply(T, &c) != AQS_OK) abort();
-        compare(S, T, op_names[c.op], step++);
+        compare(S, T, &inj, op_names[c.op], step++);
     }
     while (!done(&in)) {
         call c;
@@ -386,7 +405,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 abort();
             }
         }
-        compare(S, T, op_names[c.op], step++);
+        compare(S, T, &inj, op_names[c.op], step++);
     }
     aqs_linkage_destroy(S);
     aqs_linkage_destroy(T);
