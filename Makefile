@@ -1,7 +1,9 @@
 # aqs -- adaptive quasi-statics. See README.md.
 #   make            build/libaqs.so.X.Y.Z and build/libaqs.a (needs only a C compiler and
 #                   libccd; installs nothing)
-#   make check      every test (C, C++ reference, Python, install, ABI); SANITIZE=1 under ASan/UBSan
+#   make check      every test (C, C++ reference, Python, install, ABI, a short fuzz run);
+#                   SANITIZE=1 under ASan/UBSan, DEBUG=1 at -O0; both check src/invariant.h's asserts
+#   make fuzz       build/fuzz/aqs_fuzz, the libFuzzer target (clang; docs/testing.md)
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
 #   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
@@ -31,10 +33,17 @@ ifeq ($(SANITIZE),1)
 BUILD := build/san
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 OPT := -O1 -g
+DEBUG_DEFS := -DAQS_DEBUG
+else ifeq ($(DEBUG),1)
+BUILD := build/debug
+SANFLAGS :=
+OPT := -O0 -g
+DEBUG_DEFS := -DAQS_DEBUG
 else
 BUILD := build
 SANFLAGS :=
 OPT := -O2 -funroll-loops -g
+DEBUG_DEFS :=
 endif
 
 # make's built-in default CC is cc and CXX is g++; both may be overridden.
@@ -48,7 +57,8 @@ endif
 WARN := -Wall -Wextra $(WERROR_FLAG) -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wno-unused-parameter
 # The project's flags come first, the user's CPPFLAGS / CFLAGS after them (so -O3 or -g0
 # there wins, while -std=c99 -fPIC -fvisibility=hidden stay).
-CPPFLAGS_LIB := -DAQS_BUILDING_LIBRARY -Iinclude -Isrc
+# AQS_DEBUG (SANITIZE=1, DEBUG=1): the internal invariants of src/invariant.h are checked.
+CPPFLAGS_LIB := -DAQS_BUILDING_LIBRARY $(DEBUG_DEFS) -Iinclude -Isrc
 CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden $(SANFLAGS)
 CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
 CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude \
@@ -158,7 +168,7 @@ $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.h
 	@$(CXX) $(CXXFLAGS_TEST) $(CPPFLAGS) $(CXXFLAGS) $(LDFLAGS) -o $@ $< -L$(BUILD) \
 	    -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench
+check: check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench check-fuzz
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
 
 # Exports of the shared library; globals of the static library (all aqs-prefixed, and a
@@ -336,3 +346,36 @@ bench-collide: $(BUILD)/bench/collide_bench
 
 clean:
 	rm -rf build
+
+# Differential fuzzing of the whole API with injected allocation failures
+# (tests/fuzz/api_fuzz.c, docs/testing.md): clang's libFuzzer with ASan and UBSan.
+# check-fuzz also runs tests/test_stale.c under clang's UBSan (pointer-overflow:
+# NULL + 0, which gcc's UBSan does not report). Both are skipped, with a message,
+# when clang or its libFuzzer runtime (Debian: clang, libclang-rt-14-dev) is missing.
+FUZZ_CC ?= clang
+FUZZ_RUNS ?= 20000
+FUZZ := build/fuzz/aqs_fuzz
+FUZZ_SRC := -DAQS_BUILDING_LIBRARY -DAQS_DEBUG -Iinclude -Isrc $(CCD_CFLAGS) $(SRCS)
+.PHONY: fuzz check-fuzz
+fuzz: $(FUZZ)
+$(FUZZ): tests/fuzz/api_fuzz.c $(SRCS) $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
+	@mkdir -p $(dir $@)
+	@echo "  CLANG   $@"
+	@$(FUZZ_CC) -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+	    -o $@ tests/fuzz/api_fuzz.c $(FUZZ_SRC) $(LDLIBS)
+build/fuzz/test_stale_ubsan: tests/test_stale.c $(TEST_SUPPORT) $(SRCS) $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
+	@mkdir -p $(dir $@)
+	@echo "  CLANG   $@"
+	@$(FUZZ_CC) -std=c99 -O1 -g -fsanitize=undefined,pointer-overflow -fno-sanitize-recover=all \
+	    -Itests/support -o $@ tests/test_stale.c $(TEST_SUPPORT) $(FUZZ_SRC) -lcmocka $(LDLIBS)
+check-fuzz: | $(BUILD_PREREQ)
+	@if ! printf 'int LLVMFuzzerTestOneInput(const unsigned char *d, unsigned long n) { return d && n; }\n' \
+	    | $(FUZZ_CC) -fsanitize=fuzzer -x c - -o build/.fuzz-probe >/dev/null 2>&1; then \
+	    echo "check-fuzz: SKIPPED: $(FUZZ_CC) with libFuzzer not found (Debian: apt-get install clang libclang-rt-14-dev)"; \
+	else rm -f build/.fuzz-probe; \
+	    $(MAKE) --no-print-directory $(FUZZ) build/fuzz/test_stale_ubsan && \
+	    echo "== build/fuzz/test_stale_ubsan" && build/fuzz/test_stale_ubsan && \
+	    echo "== $(FUZZ) -runs=$(FUZZ_RUNS) -seed=1 (log: build/fuzz/check.log)" && \
+	    if (cd build/fuzz && ./aqs_fuzz -runs=$(FUZZ_RUNS) -seed=1 -max_len=1024 \
+	            -print_final_stats=1 > check.log 2>&1); then grep -a '^Done\|^stat::' build/fuzz/check.log; \
+	    else tail -n 60 build/fuzz/check.log; echo "check-fuzz: FAILED (reproducer crash-* in build/fuzz)"; exit 1; fi; fi

@@ -16,7 +16,7 @@
  * repetition, on the first only at 50,000 atoms). Medians over the
  * repetitions, after WARMUP steps; also per row the mean lazy time per
  * processed node, the sphere tests per processed node, the near-list pairs
- * re-tested and the certificates reused / made by the lazy query (internal
+ * re-tested and the certificates reused / made by the lazy query (aqs_linkage_get_query_stats
  * counters: docs/collision.md, "Certificates"). */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -26,9 +26,6 @@
 #include <time.h>
 
 #include "aqs.h"
-/* Internal counters of the certificates (near pairs re-tested, certificates
- * reused and made): the benchmark links the static library. */
-#include "../src/collide.h"
 
 static const double Q1[4] = {1, 0, 0, 0}, O3[3] = {0, 0, 0};
 
@@ -229,7 +226,7 @@ static int run(const char *name, int which, int32_t size, double radius, int rep
             return 1;
     for (r = 0; r < reps; r++) {
         aqs_solve_stats st;
-        int32_t nr, v;
+        aqs_collision_stats cs;
         double t0;
         aqs_status s;
         if (check(A, aqs_linkage_step(A, dt), "step") || check(B, aqs_linkage_step(B, dt), "step")) return 1;
@@ -238,17 +235,19 @@ static int run(const char *name, int which, int32_t size, double radius, int rep
         t0 = now();
         s = aqs_linkage_collide(A, AQS_COLLIDE_LAZY, NULL, 0, &count);
         tl[r] = now() - t0;
-        aqs_linkage_get_collision_stats(A, &nr, &v, NULL, NULL);
-        refit[r] = nr;
-        vt[r] = v;
-        near[r] = A->col->near_tests;
-        reused[r] = A->col->certs_reused;
-        made[r] = A->col->certs_made;
+        cs.size = sizeof cs;
+        aqs_linkage_get_query_stats(A, &cs);
+        refit[r] = cs.nodes_refit;
+        vt[r] = cs.volume_tests;
+        near[r] = cs.near_tests;
+        reused[r] = cs.certs_reused;
+        made[r] = cs.certs_made;
         t0 = now();
         s |= aqs_linkage_collide(B, AQS_COLLIDE_FULL, NULL, 0, &cf);
         tf[r] = now() - t0;
-        aqs_linkage_get_collision_stats(B, NULL, &v, NULL, NULL);
-        vtf[r] = v;
+        cs.size = sizeof cs;
+        aqs_linkage_get_query_stats(B, &cs);
+        vtf[r] = cs.volume_tests;
         if (r % brute_every == 0) {
             t0 = now();
             s |= aqs_linkage_collide(B, AQS_COLLIDE_BRUTE, NULL, 0, &cb);

@@ -751,6 +751,26 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *linkage,
                                                    int32_t *nodes_refit, int32_t *volume_tests,
                                                    int32_t *narrow_tests, int32_t *nodes_skipped);
 
+/** Work of the last collision query (aqs_linkage_collide, aqs_linkage_any_contact,
+ *  or the penalty contact of a solve), all of it: the caller sets
+ *  size = sizeof(aqs_collision_stats); the library fills only the fields that
+ *  size covers (as for aqs_solve_stats). Zero before any query. The certificate
+ *  counters are those of docs/collision.md, "Certificates". */
+typedef struct aqs_collision_stats {
+    uint32_t size;         /**< set by the caller: sizeof(aqs_collision_stats) */
+    int32_t nodes_refit;   /**< bounding volumes recomputed */
+    int32_t volume_tests;  /**< pairs of bounding spheres tested */
+    int32_t narrow_tests;  /**< pairs of shapes given to libccd (after a shape-level sphere test) */
+    int32_t nodes_skipped; /**< subassemblies skipped: still free of internal contact */
+    int32_t certs_reused;  /**< cross pairs whose separation certificate still held */
+    int32_t certs_made;    /**< cross pairs certified anew (a near list built) */
+    int32_t near_tests;    /**< shape pairs retested from near lists */
+} aqs_collision_stats;
+
+/** Fill stats (stats->size set by the caller, >= 8). Any phase. Returns
+ *  AQS_OK, AQS_EINVAL (NULL linkage or stats, size too small). */
+AQS_API aqs_status aqs_linkage_get_query_stats(const aqs_linkage *linkage, aqs_collision_stats *stats);
+
 /** Penalty contact (docs/collision.md): with stiffness k > 0 (force per
  *  unit depth, N/m), every solve and step first finds all contacts (a lazy
  *  query) and applies, for each, the force k * depth along its normal at the
@@ -760,7 +780,7 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *linkage,
  *  accelerations. k = 0 (the default) turns it off. stiffness: finite,
  *  >= 0. After finalize; builds the collision data (AQS_ENOMEM possible) so
  *  that solving and stepping still allocate nothing. The statistics of
- *  aqs_linkage_get_collision_stats then describe the last query of either
+ *  aqs_linkage_get_query_stats then describe the last query of either
  *  kind. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, double stiffness);
 

@@ -11,6 +11,7 @@
 
 #include "dca.h"
 #include "heap.h"
+#include "stale.h"
 #include "totalacc.h"
 #include "update.h"
 
@@ -35,7 +36,6 @@ aqs_status adaptive_alloc(aqs_linkage *L)
     s->counted = 0;
     for (i = 0; i < L->m.ne; i++)
         if (L->joints[L->m.eff_joint[i]].type != AQS_JOINT_FREE) s->counted++;
-    s->valid = 0;
     s->all = 0;
     return AQS_OK;
 }
@@ -290,12 +290,13 @@ static void run(aqs_linkage *L, heap *h, double eps)
 }
 
 /* A solve that computed every joint: no bound, nothing queued. */
-static void finish_exact(solve_state *s)
+static void finish_exact(aqs_linkage *L)
 {
+    solve_state *s = &L->s;
     s->all = 1;
     s->bound = 0.0;
     s->a_root = 0.0;
-    s->valid = 1;
+    stale_set_refinable(L, 1);
 }
 
 void adaptive_mark_exact(aqs_linkage *L)
@@ -305,7 +306,7 @@ void adaptive_mark_exact(aqs_linkage *L)
     s->tracked = 1;
     s->lower = s->sum = 0.0;
     s->capped = 0;
-    finish_exact(s);
+    finish_exact(L);
 }
 
 void adaptive_solve(aqs_linkage *L)
@@ -319,18 +320,18 @@ void adaptive_solve(aqs_linkage *L)
     s->sum = 0.0;
     s->comp_sq = 0.0;
     s->npredicted = 0;
-    s->valid = 0;
+    stale_set_refinable(L, 0);
     if (t->nnodes == 0) { /* nothing moves */
         if (L->m.comp_welded[L->m.ncomp])
             dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
-        finish_exact(s);
+        finish_exact(L);
         return;
     }
     if (s->eps == 0.0 && s->max_computed == 0) {
         /* Exact: every node, parents before children (descending index). */
         for (n = t->nnodes - 1; n >= 0; n--)
             if (t->nodes[n].joint >= 0) process(L, n, kids);
-        finish_exact(s);
+        finish_exact(L);
         return;
     }
     {
@@ -363,7 +364,7 @@ void adaptive_solve(aqs_linkage *L)
         }
         run(L, &h, s->eps);
     }
-    s->valid = 1;
+    stale_set_refinable(L, 1);
 }
 
 void adaptive_refine(aqs_linkage *L, double eps)
@@ -387,7 +388,7 @@ void adaptive_integrate(aqs_linkage *L, double h)
             joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
         }
         update_all_poses(L);
-        update_mark_all(L);
+        stale_positions(L, -1);
     } else {
         for (i = 0; i < s->nprocessed; i++) {
             const joint_def *jd = &L->joints[L->m.eff_joint[t->nodes[s->processed[i]].joint]];
@@ -397,9 +398,8 @@ void adaptive_integrate(aqs_linkage *L, double h)
         for (i = s->nprocessed - 1; i >= 0; i--) {
             n = s->processed[i];
             update_node_poses(L, n);
-            update_mark(L, n);
+            stale_positions(L, n);
         }
+        if (s->nprocessed == 0) stale_loads(L); /* a step never leaves a solve to refine */
     }
-    L->loads_dirty = 1; /* world-frame loads are re-expressed (§9.1) */
-    s->valid = 0;
 }

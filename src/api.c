@@ -1,7 +1,6 @@
 /* api.c -- the public entry points: argument checks, phases, status codes
  * and error messages. The numerical work is in the other files. */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,10 +9,12 @@
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
+#include "check.h"
 #include "collide.h"
 #include "dca.h"
 #include "linkage.h"
 #include "model.h"
+#include "stale.h"
 #include "totalacc.h"
 #include "update.h"
 
@@ -42,15 +43,6 @@ AQS_API const char *aqs_status_string(aqs_status status)
     }
 }
 
-aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(L->error, sizeof L->error, fmt, ap);
-    va_end(ap);
-    return status;
-}
-
 /* ---------------------------------------------------------------- helpers */
 
 static int finite_n(const double *v, int n, int *bad)
@@ -74,16 +66,6 @@ static int finite_n(const double *v, int n, int *bad)
         if (!(p)) return lk_fail((L), AQS_EINVAL, "%s: %s is NULL", fn, #p);                   \
     } while (0)
 
-static aqs_status check_vec(aqs_linkage *L, const char *fn, const char *name, const double *v,
-                            int n)
-{
-    int bad;
-    if (!v) return lk_fail(L, AQS_EINVAL, "%s: %s is NULL", fn, name);
-    if (!finite_n(v, n, &bad))
-        return lk_fail(L, AQS_EINVAL, "%s: %s[%d] = %g is not finite", fn, name, bad, v[bad]);
-    return AQS_OK;
-}
-
 static aqs_status check_body(aqs_linkage *L, const char *fn, int32_t body)
 {
     if (body < 0 || body >= L->nbodies)
@@ -100,13 +82,6 @@ static aqs_status check_joint(aqs_linkage *L, const char *fn, int32_t joint)
     return AQS_OK;
 }
 
-static aqs_status need_finalized(aqs_linkage *L, const char *fn)
-{
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
-    return AQS_OK;
-}
-
 static aqs_status need_building(aqs_linkage *L, const char *fn)
 {
     if (L->finalized)
@@ -116,7 +91,7 @@ static aqs_status need_building(aqs_linkage *L, const char *fn)
 
 static aqs_status need_solved(aqs_linkage *L, const char *fn)
 {
-    aqs_status st = need_finalized(L, fn);
+    aqs_status st = check_finalized(L, fn);
     if (st == AQS_OK && !L->solved)
         return lk_fail(L, AQS_ESTATE, "%s: nothing solved yet (call aqs_linkage_solve or aqs_linkage_step)", fn);
     return st;
@@ -221,7 +196,7 @@ AQS_API aqs_status aqs_linkage_set_exact_solver(aqs_linkage *L, int32_t solver)
     }
     if (solver != L->exact_solver) {
         L->exact_solver = solver;
-        L->s.valid = 0;
+        stale_settings(L);
     }
     return AQS_OK;
 }
@@ -349,9 +324,7 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
                        "%s: a free joint must have parent AQS_WORLD, got parent = %d", fn, (int)parent);
     if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK) return st;
     if ((st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK) return st;
-    qn = sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
-    if (fabs(qn - 1.0) > 1e-6)
-        return lk_fail(L, AQS_EINVAL, "%s: quat has norm %.17g, not 1 (tolerance 1e-6)", fn, qn);
+    if ((st = check_unit_quat(L, fn, "quat", quat, &qn)) != AQS_OK) return st;
     if (joint_uses_axis(type)) {
         if ((st = check_vec(L, fn, "axis", axis, 3)) != AQS_OK) return st;
         an = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
@@ -362,25 +335,28 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
     nv = joint_nv(type);
     if (L->nq > INT32_MAX - 8 || L->njoints == INT32_MAX - 1)
         return lk_fail(L, AQS_ENOMEM, "%s: too many joints", fn);
-    /* Reserve everything first so that a failure changes nothing. */
+    /* Reserve everything first so that a failure changes nothing. q and tau
+     * exist from the first joint on, fixed ones included: L->q + offset is
+     * then never arithmetic on NULL. */
     {
         joint_def *nj = NULL;
         double *nqa = NULL, *nta = NULL;
         size_t jcap = (size_t)L->joint_cap, qcap = (size_t)L->q_cap, vcap = (size_t)L->v_cap;
-        if (L->njoints == L->joint_cap) {
+        int grow_j = L->njoints == L->joint_cap, grow_q = L->nq + nq > L->q_cap || !L->q,
+            grow_v = L->nv + nv > L->v_cap || !L->tau;
+        if (grow_j) {
             jcap = jcap ? 2 * jcap : 16;
             nj = grown(L, L->joints, (size_t)L->njoints, jcap, sizeof *nj);
         }
-        if (L->nq + nq > L->q_cap) {
+        if (grow_q) {
             qcap = qcap ? 2 * qcap + (size_t)nq : 64;
             nqa = grown(L, L->q, (size_t)L->nq, qcap, sizeof(double));
         }
-        if (L->nv + nv > L->v_cap) {
+        if (grow_v) {
             vcap = vcap ? 2 * vcap + (size_t)nv : 64;
             nta = grown(L, L->tau, (size_t)L->nv, vcap, sizeof(double));
         }
-        if ((L->njoints == L->joint_cap && !nj) || (L->nq + nq > L->q_cap && !nqa) ||
-            (L->nv + nv > L->v_cap && !nta)) {
+        if ((grow_j && !nj) || (grow_q && !nqa) || (grow_v && !nta)) {
             lk_free(L, nj);
             lk_free(L, nqa);
             lk_free(L, nta);
@@ -453,7 +429,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     for (n = 0; n < L->t.nnodes; n++)
         if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
     update_all_poses(L);
-    update_mark_all(L);
+    stale_tree(L);
     /* The DCA coefficients only when the DCA is the exact solver, or when
      * nothing can move (no tree node: the solve takes the DCA path, and its
      * few bytes are allocated here rather than in a solve). Tolerances and
@@ -465,7 +441,6 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         }
     }
     L->finalized = 1;
-    L->solved = 0;
     return AQS_OK;
 }
 
@@ -501,7 +476,7 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *cL, int32_t *no
     aqs_linkage *L = (aqs_linkage *)cL;
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, "aqs_linkage_get_tree_stats")) != AQS_OK) return st;
+    if ((st = check_finalized(L, "aqs_linkage_get_tree_stats")) != AQS_OK) return st;
     if (nodes) *nodes = L->t.nnodes;
     if (height) *height = L->t.height;
     if (mean_handles) *mean_handles = L->t.mean_handles;
@@ -517,8 +492,7 @@ AQS_API aqs_status aqs_linkage_set_gravity(aqs_linkage *L, const double gravity[
     CHECK_LINKAGE(L);
     if ((st = check_vec(L, "aqs_linkage_set_gravity", "gravity", gravity, 3)) != AQS_OK) return st;
     memcpy(L->gravity, gravity, sizeof L->gravity);
-    L->gravity_dirty = 1;
-    L->s.valid = 0;
+    stale_gravity(L);
     return AQS_OK;
 }
 
@@ -542,8 +516,7 @@ AQS_API aqs_status aqs_body_set_force(aqs_linkage *L, int32_t body, const double
         L->load_slot[body] = L->nloaded;
         L->loaded_bodies[L->nloaded++] = body;
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
     return AQS_OK;
 }
 
@@ -556,8 +529,7 @@ static void remove_load(aqs_linkage *L, int32_t body)
     L->load_slot[last] = slot;
     L->load_slot[body] = -1;
     memset(&L->loads[body], 0, sizeof(body_load));
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
 }
 
 AQS_API aqs_status aqs_body_clear_force(aqs_linkage *L, int32_t body)
@@ -584,10 +556,9 @@ AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *L)
             if (L->tau[jd->voff + k] != 0.0) actuated = 1;
         if (!actuated) continue;
         memset(L->tau + jd->voff, 0, sizeof(double) * (size_t)nv);
-        if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[j]]);
+        stale_joint_force(L, L->finalized ? L->t.node_of_eff[L->m.eff_of_joint[j]] : -1);
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
+    stale_loads(L);
     return AQS_OK;
 }
 
@@ -605,8 +576,7 @@ AQS_API aqs_status aqs_joint_set_force(aqs_linkage *L, int32_t joint, const doub
     if (nv == 0) return AQS_OK;
     if ((st = check_vec(L, fn, "tau", tau, nv)) != AQS_OK) return st;
     memcpy(L->tau + L->joints[joint].voff, tau, sizeof(double) * (size_t)nv);
-    if (L->finalized) update_mark(L, L->t.node_of_eff[L->m.eff_of_joint[joint]]);
-    L->s.valid = 0;
+    stale_joint_force(L, L->finalized ? L->t.node_of_eff[L->m.eff_of_joint[joint]] : -1);
     return AQS_OK;
 }
 
@@ -632,6 +602,13 @@ static aqs_status check_outputs(aqs_linkage *L, const char *fn)
     if (s->all) {
         for (i = 0; i < L->njoints && st == AQS_OK; i++) st = check_joint_outputs(L, fn, i);
     } else {
+        /* An adaptive solve orders the joints by A (MATH.md §6): overflowed
+         * values make the order and the bound meaningless (an infinite relative
+         * bound over zero accelerations is a true statement, a NaN is not). */
+        if (isnan(s->bound) || !isfinite(s->sum) || !isfinite(s->a_root))
+            return lk_fail(L, AQS_ENUMERIC,
+                           "%s: the error bound came out non-finite (bound = %g, queued sum = %g): "
+                           "the loads are too large for double precision", fn, s->bound, s->sum);
         for (i = 0; i < s->nprocessed && st == AQS_OK; i++)
             st = check_joint_outputs(L, fn, L->m.eff_joint[L->t.nodes[s->processed[i]].joint]);
     }
@@ -661,23 +638,24 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
     if (exact_by_aba(L) || fb || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
     if (exact_by_aba(L) || fb) {
         if ((st = aba_solve(L)) != AQS_OK) {
-            L->solved = 0;
-            L->s.valid = 0;
+            stale_solve_failed(L);
             return st;
         }
         L->exact_by_aba = 1;
     } else {
         /* allocated already by finalize or by the setters that lead here */
         if ((st = dca_enable(L, fn)) != AQS_OK) return st;
-        if ((st = update_coefficients(L)) != AQS_OK) return st;
+        if ((st = update_coefficients(L)) != AQS_OK) {
+            stale_solve_failed(L); /* the results would be the previous solve's */
+            return st;
+        }
         adaptive_solve(L);
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
-        L->solved = 0;
-        L->s.valid = 0;
+        stale_solve_failed(L);
         return st;
     }
-    L->solved = 1;
+    stale_solve_done(L);
     if (fb) {
         L->fb_left--;
         L->fb_last = 1;
@@ -692,7 +670,7 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
     static const char fn[] = "aqs_linkage_solve";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     return solve(L, fn);
 }
 
@@ -733,7 +711,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     aqs_status st;
     int32_t before, before_f;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
     if ((st = solve(L, fn)) != AQS_OK) return st;
@@ -757,8 +735,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         memcpy(msg, L->error, sizeof msg);
         copy_moved_positions(L, L->q, L->q_saved);
         update_all_poses(L);
-        update_mark_all(L);
-        L->loads_dirty = 1;
+        stale_positions(L, -1);
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
@@ -770,18 +747,18 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     static const char fn[] = "aqs_linkage_set_tolerance";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_JOINT)
         return lk_fail(L, AQS_EINVAL, "%s: metric = %d is not an AQS_METRIC_* value", fn, (int)metric);
     if (!isfinite(eps) || eps < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
     if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
         if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
-        update_mark_all(L);
+        stale_tree(L);
     }
     L->s.metric = metric;
     L->s.eps = eps;
-    L->s.valid = 0;
+    stale_settings(L);
     L->fb_left = 0;
     adaptive_predict_clear(L); /* made for the former measure */
     return AQS_OK;
@@ -792,13 +769,12 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
     static const char fn[] = "aqs_linkage_set_max_computed";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (max_joints < 0)
         return lk_fail(L, AQS_EINVAL, "%s: max_joints = %d must be >= 0", fn, (int)max_joints);
     if (max_joints > 0 && !L->t.tdata && L->t.nnodes > 0) {
         if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
-        update_mark_all(L);
-        L->s.valid = 0;
+        stale_tree(L);
     }
     L->s.max_computed = max_joints;
     L->fb_left = 0;
@@ -831,7 +807,7 @@ AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *L, double margin)
     static const char fn[] = "aqs_linkage_set_prediction";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(margin) || (margin != 0.0 && margin < 1.0))
         return lk_fail(L, AQS_EINVAL, "%s: margin = %g must be 0 (off) or a finite number >= 1", fn,
                        margin);
@@ -846,7 +822,7 @@ AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *cL, double *mar
     aqs_linkage *L = (aqs_linkage *)cL;
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, margin);
     *margin = L->s.margin;
     return AQS_OK;
@@ -857,11 +833,11 @@ AQS_API aqs_status aqs_linkage_set_joint_bound(aqs_linkage *L, int32_t kind)
     static const char fn[] = "aqs_linkage_set_joint_bound";
     aqs_status st;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (kind != AQS_JOINT_BOUND_HEAP_TOP && kind != AQS_JOINT_BOUND_SUM)
         return lk_fail(L, AQS_EINVAL, "%s: kind = %d is not an AQS_JOINT_BOUND_* value", fn, (int)kind);
     L->s.joint_bound = kind;
-    L->s.valid = 0;
+    stale_settings(L);
     adaptive_predict_clear(L);
     return AQS_OK;
 }
@@ -880,10 +856,7 @@ AQS_API aqs_status aqs_linkage_refine(aqs_linkage *L, double eps)
     if (L->s.all || eps >= L->s.bound) return AQS_OK;
     adaptive_refine(L, eps);
     L->s.eps = eps;
-    if ((st = check_outputs(L, fn)) != AQS_OK) {
-        L->solved = 0;
-        L->s.valid = 0;
-    }
+    if ((st = check_outputs(L, fn)) != AQS_OK) stale_solve_failed(L);
     return st;
 }
 
@@ -952,9 +925,12 @@ static aqs_status check_joint_position(aqs_linkage *L, const char *fn, int32_t j
     if (r > 0)
         return lk_fail(L, AQS_EINVAL, "%s: position value %d of joint %d is %g, not finite", fn,
                        r - 1, (int)j, q[r - 1]);
-    if (r < 0)
-        return lk_fail(L, AQS_EINVAL, "%s: the quaternion of joint %d is not unit (tolerance 1e-6)",
-                       fn, (int)j);
+    if (r < 0) { /* the message of every unit-quaternion check */
+        char name[48];
+        double norm;
+        snprintf(name, sizeof name, "the quaternion of joint %d", (int)j);
+        return check_unit_quat(L, fn, name, q + (L->joints[j].type == AQS_JOINT_FREE ? 3 : 0), &norm);
+    }
     return AQS_OK;
 }
 
@@ -963,14 +939,14 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
     if (!L->finalized) return;
     if (joint < 0) {
         update_all_poses(L);
-        update_mark_all(L);
+        stale_positions(L, -1);
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
         update_poses_from_joint(L, e);
-        update_mark(L, L->t.node_of_eff[e]);
+        stale_positions(L, L->t.node_of_eff[e]);
+    } else {
+        stale_loads(L); /* a fixed joint moves nothing; as for any position change */
     }
-    L->loads_dirty = 1;
-    L->s.valid = 0;
 }
 
 AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, size_t n)
@@ -1104,7 +1080,7 @@ AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *cL, int32_t body, 
     pose P;
     CHECK_LINKAGE(L);
     if ((st = check_body(L, fn, body)) != AQS_OK) return st;
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, pos);
     CHECK_PTR(L, fn, quat);
     update_body_pose_world(L, body, &P);
@@ -1119,7 +1095,7 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, doubl
     aqs_status st;
     int32_t b;
     CHECK_LINKAGE(L);
-    if ((st = need_finalized(L, fn)) != AQS_OK) return st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, poses);
     if (n < 7 * (size_t)L->nbodies)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);

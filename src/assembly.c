@@ -455,7 +455,6 @@ aqs_status assembly_build(aqs_linkage *L)
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->dirty_tmp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
-    t->all_dirty = 1;
     if (!t->poses || !t->scratch || !t->mscratch || !t->hscratch || !t->stamp || !t->dirty ||
         !t->dirty_tmp) goto fail;
     lk_free(L, B.uf);

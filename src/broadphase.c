@@ -116,10 +116,11 @@ static void world_centre(const double *s, const pose *W, double out[3])
 
 /* ------------------------------------------------------------ state */
 
-void broadphase_reset(aqs_linkage *L)
+static void forget_built(collision *c);
+
+/* Free the built data of c (L->col or a saved copy of it) and forget it. */
+static void release(aqs_linkage *L, collision *c)
 {
-    collision *c = L->col;
-    if (!c) return;
     lk_free(L, c->shape_in);
     lk_free(L, c->comp_start);
     lk_free(L, c->comp_shapes);
@@ -148,6 +149,12 @@ void broadphase_reset(aqs_linkage *L)
     lk_free(L, c->comp_world);
     lk_free(L, c->placed);
     lk_free(L, c->centres);
+    forget_built(c);
+}
+
+/* Forget the built data of c without freeing it (a copy holds it). */
+static void forget_built(collision *c)
+{
     c->shape_in = NULL;
     c->comp_start = c->comp_shapes = NULL;
     c->sph = c->centres = NULL;
@@ -163,6 +170,30 @@ void broadphase_reset(aqs_linkage *L)
     c->qstamp = 0;
     c->placed = NULL;
     c->built = 0;
+}
+
+void broadphase_reset(aqs_linkage *L)
+{
+    if (L->col) release(L, L->col);
+}
+
+aqs_status broadphase_rebuild(aqs_linkage *L, int32_t nshapes, const char *fn)
+{
+    collision *c = L->col, old = *c;
+    aqs_status st;
+    /* the new data is built beside the old, which a failure restores whole
+       (counters and caches included) */
+    forget_built(c);
+    c->nshapes = nshapes;
+    st = broadphase_build(L, fn);
+    if (st != AQS_OK) {
+        old.shapes = c->shapes; /* the caller's array (possibly grown) stays */
+        old.shape_cap = c->shape_cap;
+        *c = old;
+        return st;
+    }
+    release(L, &old);
+    return AQS_OK;
 }
 
 void broadphase_forget(aqs_linkage *L)

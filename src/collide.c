@@ -5,10 +5,13 @@
 #include <string.h>
 
 #include "aqs.h"
+#include "check.h"
 #include "collide.h"
 #include "linkage.h"
+#include "stale.h"
 
-collision *collide_state(aqs_linkage *L)
+/* Get (creating on first use) the collision state. NULL on allocation failure. */
+static collision *collide_state(aqs_linkage *L)
 {
     if (!L->col) {
         L->col = lk_calloc(L, 1, sizeof(collision));
@@ -23,10 +26,7 @@ collision *collide_state(aqs_linkage *L)
 static void contacts_changed(aqs_linkage *L)
 {
     broadphase_forget(L);
-    if (L->col && L->col->stiffness > 0.0) {
-        L->loads_dirty = 1;
-        L->s.valid = 0; /* the loads changed: no refine of the last solve */
-    }
+    if (L->col && L->col->stiffness > 0.0) stale_loads(L); /* penalty forces */
 }
 
 void collide_free(aqs_linkage *L)
@@ -62,17 +62,10 @@ static aqs_status check_placement(aqs_linkage *L, const char *fn, const double p
 {
     int i;
     double q[4], len;
-    if (!pos) return lk_fail(L, AQS_EINVAL, "%s: pos is NULL", fn);
-    if (!quat) return lk_fail(L, AQS_EINVAL, "%s: quat is NULL", fn);
-    for (i = 0; i < 3; i++)
-        if (!isfinite(pos[i]))
-            return lk_fail(L, AQS_EINVAL, "%s: pos[%d] = %g is not finite", fn, i, pos[i]);
-    for (i = 0; i < 4; i++)
-        if (!isfinite(quat[i]))
-            return lk_fail(L, AQS_EINVAL, "%s: quat[%d] = %g is not finite", fn, i, quat[i]);
-    len = quat_norm(quat);
-    if (!(fabs(len - 1.0) <= 1e-6))
-        return lk_fail(L, AQS_EINVAL, "%s: quat has norm %.17g, not unit (tolerance 1e-6)", fn, len);
+    aqs_status st;
+    if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK || (st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK ||
+        (st = check_unit_quat(L, fn, "quat", quat, &len)) != AQS_OK)
+        return st;
     for (i = 0; i < 4; i++) q[i] = quat[i] / len;
     pose_from_quat(pos, q, P);
     return AQS_OK;
@@ -94,18 +87,15 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
     }
     c->shapes[c->nshapes] = *s;
     shape_bound(&c->shapes[c->nshapes]);
-    c->nshapes++;
-    broadphase_reset(L); /* rebuilt at the next query */
     if (L->finalized && c->stiffness > 0.0) {
-        /* penalty contact: build now, so that solving never allocates */
-        aqs_status st = broadphase_build(L, fn);
-        if (st != AQS_OK) {
-            c->nshapes--;
-            (void)broadphase_build(L, fn); /* as before, if memory allows; else at the next query */
-            return st;
-        }
-        L->loads_dirty = 1;
-        L->s.valid = 0;
+        /* penalty contact: build now, so that solving never allocates; a
+           failure keeps the former shapes' data, which solving needs */
+        aqs_status st = broadphase_rebuild(L, c->nshapes + 1, fn);
+        if (st != AQS_OK) return st;
+        stale_loads(L);
+    } else {
+        c->nshapes++;
+        broadphase_reset(L); /* rebuilt at the next query */
     }
     if (out) *out = c->nshapes - 1;
     return AQS_OK;
@@ -266,8 +256,8 @@ AQS_API aqs_status aqs_linkage_set_collide_joined(aqs_linkage *L, int32_t enable
 
 static aqs_status prepare(aqs_linkage *L, const char *fn)
 {
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    aqs_status st;
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!L->col || L->col->nshapes == 0) return AQS_OK;
     return broadphase_build(L, fn);
 }
@@ -322,14 +312,39 @@ AQS_API aqs_status aqs_linkage_get_collision_stats(const aqs_linkage *L, int32_t
     return AQS_OK;
 }
 
+AQS_API aqs_status aqs_linkage_get_query_stats(const aqs_linkage *cL, aqs_collision_stats *stats)
+{
+    static const char fn[] = "aqs_linkage_get_query_stats";
+    aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
+    const collision *c;
+    aqs_collision_stats full;
+    uint32_t size;
+    if (!L) return AQS_EINVAL;
+    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
+    size = stats->size;
+    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    memset(&full, 0, sizeof full);
+    full.size = size;
+    if ((c = L->col) != NULL) {
+        full.nodes_refit = c->nodes_refit;
+        full.volume_tests = c->volume_tests;
+        full.narrow_tests = c->narrow_tests;
+        full.nodes_skipped = c->nodes_skipped;
+        full.certs_reused = c->certs_reused;
+        full.certs_made = c->certs_made;
+        full.near_tests = c->near_tests;
+    }
+    memcpy(stats, &full, size < sizeof full ? size : sizeof full);
+    return AQS_OK;
+}
+
 AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stiffness)
 {
     static const char fn[] = "aqs_linkage_set_contact_stiffness";
     collision *c;
     aqs_status st;
     if (!L) return AQS_EINVAL;
-    if (!L->finalized)
-        return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(stiffness) || stiffness < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: stiffness = %g must be finite and >= 0", fn, stiffness);
     if (!L->col && stiffness == 0.0) return AQS_OK; /* the default: nothing to store */
@@ -337,8 +352,7 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *L, double stif
     if (c->nshapes > 0 && (st = broadphase_build(L, fn)) != AQS_OK) return st;
     if (c->stiffness != stiffness) {
         c->stiffness = stiffness;
-        L->loads_dirty = 1;
-        L->s.valid = 0;
+        stale_loads(L);
     }
     return AQS_OK;
 }

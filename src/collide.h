@@ -64,8 +64,6 @@ typedef struct collision {
     int32_t certs_reused, certs_made, near_tests; /* internal (tests, bench) */
 } collision;
 
-/* Get (creating on first use) the collision state. NULL on allocation failure. */
-collision *collide_state(aqs_linkage *L);
 void collide_free(aqs_linkage *L);
 /* Forget the built data (shapes changed). */
 void broadphase_reset(aqs_linkage *L);
@@ -76,6 +74,11 @@ void broadphase_forget(aqs_linkage *L);
 void broadphase_node_moved(aqs_linkage *L, int32_t n);
 /* Build the per-node data if needed. AQS_OK or AQS_ENOMEM (message set, nothing changed). */
 aqs_status broadphase_build(aqs_linkage *L, const char *fn);
+/* Build the data for the first nshapes shapes (nshapes may exceed
+ * L->col->nshapes by the shapes just appended) beside the current data. On
+ * AQS_ENOMEM (message set) the collision state is exactly as before, the
+ * built data of the former shapes included; on AQS_OK nshapes is the count. */
+aqs_status broadphase_rebuild(aqs_linkage *L, int32_t nshapes, const char *fn);
 /* Run a query (after broadphase_build): mode AQS_COLLIDE_*; contacts up to
  * capacity into out; any != 0 stops at the first contact. Returns the total. */
 size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any);

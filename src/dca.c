@@ -9,12 +9,15 @@
 
 #include "dense.h"
 #include "model.h"
+#include "stale.h"
 #include "update.h"
 
 static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp);
 static int mp_inverse_factor(const double *mp, double *Y);
 static int mp_inverse(const double *mp, double *Iinv);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
+
+static void dca_leaf_phi(aqs_linkage *L, int32_t n);
 
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
@@ -31,12 +34,13 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
             else dca_leaf_phi(L, n);
         }
     /* every b and internal node from scratch, loads and gravity included */
-    t->all_dirty = 1;
-    L->loads_dirty = L->gravity_dirty = 1;
+    stale_tree(L);
     return AQS_OK;
 }
 
-void dca_leaf_phi(aqs_linkage *L, int32_t n)
+/* Leaf set-up of the square-root form: mass properties, rank 0 (constant
+ * after finalize; the world leaf is grounded). */
+static void dca_leaf_phi(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     node *nd = &t->nodes[n];

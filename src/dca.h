@@ -13,9 +13,6 @@
  * only exactly by the articulated-body algorithm never needs them. Marks
  * every node stale. AQS_OK or AQS_ENOMEM (message naming fn). */
 aqs_status dca_enable(aqs_linkage *L, const char *fn);
-/* Leaf set-up of the square-root form: mass properties, rank 0 (constant
- * after finalize; the world leaf is grounded). */
-void dca_leaf_phi(aqs_linkage *L, int32_t n);
 /* Leaf Phi of the inverse-inertia form, in the node's Lambda storage. */
 void dca_phi_leaf(aqs_linkage *L, int32_t n);
 /* Leaf b from the composite's external load (world leaf: from gravity). */

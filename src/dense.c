@@ -180,6 +180,7 @@ int dense_cholesky6(const double *A, double *C)
     return 0;
 }
 
+/* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6). */
 void dense_cholesky6_inverse(const double *C, double *V)
 {
     double Ci[36];

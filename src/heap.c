@@ -1,6 +1,8 @@
 /* heap.c -- binary max-heap on parallel arrays (sift up / sift down). */
 #include "heap.h"
 
+#include "invariant.h"
+
 void heap_init(heap *h, double *key, int32_t *item, int32_t capacity)
 {
     h->key = key;
@@ -8,8 +10,6 @@ void heap_init(heap *h, double *key, int32_t *item, int32_t capacity)
     h->size = 0;
     h->capacity = capacity;
 }
-
-void heap_clear(heap *h) { h->size = 0; }
 
 int heap_push(heap *h, double key, int32_t item)
 {
@@ -25,6 +25,7 @@ int heap_push(heap *h, double key, int32_t item)
     }
     h->key[i] = key;
     h->item[i] = item;
+    AQS_ASSERT(h->size <= h->capacity && (i == 0 || !(h->key[(i - 1) / 2] < key)));
     return 0;
 }
 
@@ -51,6 +52,9 @@ int heap_pop(heap *h, double *key, int32_t *item)
     }
     h->key[i] = k;
     h->item[i] = it;
+    /* the new top is no smaller than its children (NaN keys compare false) */
+    AQS_ASSERT(n < 2 || !(h->key[0] < h->key[1]));
+    AQS_ASSERT(n < 3 || !(h->key[0] < h->key[2]));
     return 0;
 }
 

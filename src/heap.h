@@ -13,7 +13,6 @@ typedef struct {
 
 /* Use the arrays key and item, each of capacity entries. */
 void heap_init(heap *h, double *key, int32_t *item, int32_t capacity);
-void heap_clear(heap *h);
 /* Insert; returns 0, or -1 when full. */
 int heap_push(heap *h, double key, int32_t item);
 /* Remove the entry with the largest key; returns 0, or -1 when empty. */

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "check.h"
+
 static const int nq_of[JOINT_TYPE_COUNT] = {1, 1, 4, 7, 0, 2, 2, 3};
 static const int nv_of[JOINT_TYPE_COUNT] = {1, 1, 3, 6, 0, 2, 2, 3};
 static const char *const names[JOINT_TYPE_COUNT] = {
@@ -51,8 +53,8 @@ int joint_check_position(int32_t type, const double *q, double *out)
     if (type == SPHERICAL) qi = 0;
     if (type == FREE) qi = 3;
     if (qi >= 0) {
-        double norm = quat_norm(q + qi);
-        if (fabs(norm - 1.0) > 1e-6) return -1;
+        double norm;
+        if (!check_quat_is_unit(q + qi, &norm)) return -1;
         for (i = 0; i < 4; i++) out[qi + i] = q[qi + i] / norm;
     }
     return 0;

@@ -30,9 +30,9 @@ void joint_directions(const double a[3], double u[3], double v[3]);
 /* The zero position (identity quaternions). */
 void joint_zero_position(int32_t type, double *q);
 /* Validate a position given by the user: finite, quaternions unit within
- * 1e-6. Writes the normalized position to out. Returns 0, or the index of the
- * first bad value (>= 1, one-based) as a positive number, or -1 for a
- * quaternion of wrong norm. */
+ * UNIT_QUAT_TOLERANCE (check.h). Writes the normalized position to out.
+ * Returns 0, or the index of the first bad value (>= 1, one-based) as a
+ * positive number, or -1 for a quaternion of wrong norm. */
 int joint_check_position(int32_t type, const double *q, double *out);
 
 /* Pose of the child frame in the joint frame at position q. */

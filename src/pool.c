@@ -1,6 +1,8 @@
 /* pool.c -- the linkage's allocator and pooled node memory. */
 #include "pool.h"
 
+#include "invariant.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -27,6 +29,7 @@ void lk_free(aqs_linkage *L, void *p)
 int64_t pool_take(int64_t *size, int64_t n)
 {
     int64_t off = *size;
+    AQS_ASSERT(n >= 0 && off >= 0 && off <= INT64_MAX - n);
     *size += n;
     return off;
 }

@@ -29,6 +29,7 @@
 
 #include "dca.h"
 #include "dense.h"
+#include "invariant.h"
 #include "pool.h"
 
 /* Height of the node whose principal joint is handle h of node n: an
@@ -173,17 +174,6 @@ static int32_t reflected_rows(const tree *t, int32_t x)
     return r;
 }
 
-/* Row r of node x's packed factor (at packed offset off) into full (cols_x
- * entries, zeros left of its start); returns the offset of row r + 1. */
-static int64_t unpack_row(const tree *t, int32_t x, int32_t r, int64_t off, double *full)
-{
-    const int32_t *pos = row_starts(t, x);
-    int32_t cx = 6 * t->nodes[x].nh + 1, len = cx - pos[r];
-    memset(full, 0, sizeof(double) * (size_t)pos[r]);
-    memcpy(full + pos[r], t->tdata + t->nodes[x].T + off, sizeof(double) * (size_t)len);
-    return off + len;
-}
-
 /* Place the rows of child x's factor from row `from` (at packed offset off)
  * on in R (C's cols x cols rows, row j starting at column j): a row starting
  * at the child's column q goes to C's row for q (map). The constant-only rows
@@ -239,6 +229,8 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     const int32_t *posA = row_starts(t, C->a), *posB = row_starts(t, C->b);
     int64_t offA = 0, offB = 0, off;
 
+    /* the factor's shape: its rows fit the scratch (at most 6 + 6 + 6 reflected) */
+    AQS_ASSERT(p <= 18 && cols <= cmax && A->trows <= 6 * A->nh + 1 && B->trows <= 6 * B->nh + 1);
     C->trows = 0;
     if (A->trows + B->trows + kd == 0) return;
     for (c = 0; c < nh; c++) posC[permC[c]] = c;
@@ -288,6 +280,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         off += cols - j;
         rowpos[r++] = j;
     }
+    AQS_ASSERT(r <= cols && off <= (int64_t)cols * (cols + 1) / 2); /* packed triangle */
     C->trows = r;
 }
 
@@ -326,12 +319,4 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
         sum += s * s;
     }
     return sum;
-}
-
-void totalacc_unpack(const aqs_linkage *L, int32_t n, double *full)
-{
-    const tree *t = &L->t;
-    int32_t cols = 6 * t->nodes[n].nh + 1, r;
-    int64_t off = 0;
-    for (r = 0; r < t->nodes[n].trows; r++) off = unpack_row(t, n, r, off, full + (int64_t)r * cols);
 }

@@ -16,9 +16,5 @@ void totalacc_free(aqs_linkage *L);
 void totalacc_node_update(aqs_linkage *L, int32_t n);
 /* A(n) at the handle forces stored in the node (its x). */
 double totalacc_eval(const aqs_linkage *L, int32_t n);
-/* Node n's factor as trows full rows of 6nh + 1 columns (row-major, in the
- * factor's column order: handle blocks tree.tperm, then the constant), for
- * tests. */
-void totalacc_unpack(const aqs_linkage *L, int32_t n, double *full);
 
 #endif

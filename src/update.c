@@ -6,6 +6,8 @@
 #include "collide.h"
 #include "dca.h"
 #include "dense.h"
+#include "invariant.h"
+#include "stale.h"
 #include "totalacc.h"
 
 void update_leaf_poses(aqs_linkage *L, int32_t n)
@@ -44,6 +46,7 @@ void update_node_poses(aqs_linkage *L, int32_t n)
         if (i != C->ka) P[ci++] = PA[i];
     for (i = 0; i < B->nh; i++)
         if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+    AQS_ASSERT(ci == C->nh && C->nh == A->nh + B->nh - 2); /* the joined handles drop out */
     if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
@@ -127,9 +130,8 @@ void update_mark(aqs_linkage *L, int32_t n)
         t->stamp[n] = t->epoch;
         t->dirty[t->ndirty++] = n;
     }
+    AQS_ASSERT(t->ndirty <= t->nnodes); /* each node once per epoch */
 }
-
-void update_mark_all(aqs_linkage *L) { L->t.all_dirty = 1; }
 
 /* Refresh a leaf's b and mark its ancestors. While the whole tree is stale
  * (all_dirty: after an exact step by the articulated-body algorithm, which
@@ -149,7 +151,7 @@ void update_loads(aqs_linkage *L)
     if (L->t.nnodes == 0) return;
     if (L->gravity_dirty) {
         refresh_leaf(L, L->t.leaf_of_comp[m->ncomp]);
-        L->gravity_dirty = 0;
+        stale_gravity_fresh(L);
     }
     if (!L->loads_dirty) return;
     for (i = 0; i < m->nloaded_comps; i++) {
@@ -174,7 +176,7 @@ void update_loads(aqs_linkage *L)
     }
     if (L->col && L->col->stiffness > 0.0) broadphase_penalty(L); /* contact forces */
     for (i = 0; i < m->nloaded_comps; i++) refresh_leaf(L, L->t.leaf_of_comp[m->loaded_comps[i]]);
-    L->loads_dirty = 0;
+    stale_loads_fresh(L);
 }
 
 /* Sort node indices ascending (children before parents: a child's index
@@ -205,6 +207,14 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
 {
     const node *nd = &L->t.nodes[n];
     if (nd->joint < 0) return AQS_OK;
+    /* children before parents: the update order relies on it */
+    AQS_ASSERT(nd->a < n && nd->b < n && (nd->parent < 0 || nd->parent > n));
+    AQS_ASSERT(L->t.nodes[nd->a].parent == n && L->t.nodes[nd->b].parent == n);
+    /* the node's blocks inside the pooled coefficients */
+    AQS_ASSERT(nd->lam >= 0 && nd->lam + 36 * (int64_t)nd->nh * nd->nh <= L->t.ndata);
+    AQS_ASSERT(nd->rank >= 0 && nd->rank <= 6 * nd->nh);
+    AQS_ASSERT(nd->xf >= 0 && nd->xf + 6 * (int64_t)nd->nh <= L->t.ndata);
+    AQS_ASSERT(nd->nh <= L->t.max_handles);
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
@@ -229,7 +239,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     if (t->nnodes == 0) return AQS_OK;
     t->factors_updated = 0;
     if (t->all_dirty) {
-        L->loads_dirty = L->gravity_dirty = 1;
+        stale_loads_all(L);
         update_loads(L); /* the composites' loads; marks are superseded by the full pass */
         /* every leaf's b (the world leaf's from gravity): those refreshed
          * while the tree was stale were skipped (refresh_leaf) */
@@ -241,11 +251,12 @@ aqs_status update_coefficients(aqs_linkage *L)
         update_loads(L);
         /* Children first: a child's index is below its parent's. */
         sort_nodes(t->dirty, t->ndirty, t->nnodes - 1, t->dirty_tmp);
+        AQS_ASSERT(t->ndirty < 2 || t->dirty[0] < t->dirty[t->ndirty - 1]);
         for (k = 0; k < t->ndirty && st == AQS_OK; k++) st = update_node(L, t->dirty[k]);
         t->nodes_updated = t->ndirty;
     }
     if (st != AQS_OK) return st; /* the marks stay: a later update retries */
-    t->all_dirty = 0;
+    stale_tree_fresh(L);
     t->ndirty = 0;
     if (++t->epoch == 0) { /* wrapped: clear the stamps once */
         memset(t->stamp, 0, sizeof(uint32_t) * (size_t)t->nnodes);

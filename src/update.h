@@ -30,8 +30,6 @@ void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *co
 /* Mark node n and its ancestors stale (MATH.md §9.1). O(log N), less when
  * an ancestor is already marked. */
 void update_mark(aqs_linkage *L, int32_t n);
-/* Mark every node stale (positions set in bulk, finalize). */
-void update_mark_all(aqs_linkage *L);
 /* When loads changed (or positions moved, loads_dirty): re-express every
  * body load in its composite's frame, refresh those leaves (and the world
  * leaf when gravity changed) and mark their ancestors. O(N_U log N). */

@@ -4,12 +4,14 @@
  * recomputation, eps = 0 reproduces the exact trajectory, and the work per
  * step is local (counters, not time). */
 #include "testutil.h"
+#include "factor.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "adaptive.h"
+#include "stale.h"
 #include "linkage.h"
 #include "totalacc.h"
 #include "update.h"
@@ -668,7 +670,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
         {
             double *T = malloc(sizeof(double) * (size_t)(c * c));
             assert_non_null(T);
-            totalacc_unpack(L, n, T);
+            test_unpack_factor(L, n, T);
             for (i = 0; i < c; i++)
                 for (j = 0; j < c; j++) {
                     double sum = 0;
@@ -781,7 +783,7 @@ static void test_lazy_equals_eager(void **state)
         }
     /* the full recomputation: every factor, the predicted set emptied */
     adaptive_predict_clear(L);
-    update_mark_all(L);
+    stale_tree(L);
     assert_int_equal(update_coefficients(L), AQS_OK);
     take_snapshot(L, &full);
     per_node_diff(L, &lazy, &full, stale, &dphi, &dgram);

@@ -9,6 +9,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "collide.h"
 #include "linkage.h"
 
 static const double Q1[4] = {1, 0, 0, 0}, O[3] = {0, 0, 0}, ZAX[3] = {0, 0, 1};
@@ -431,6 +432,58 @@ static void test_collision_api_errors(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* aqs_linkage_get_query_stats: the size-versioned statistics agree with the
+ * four-pointer getter and with the collision state's own counters (read
+ * through src/collide.h), size covers what is written, and bad arguments
+ * are AQS_EINVAL naming them. */
+static void test_query_stats(void **state)
+{
+    aqs_linkage *L = chain(6, 0.6, 1);
+    aqs_collision_stats cs, small;
+    int32_t st[4];
+    int k;
+    (void)state;
+    memset(&cs, 0x5a, sizeof cs);
+    cs.size = sizeof cs;
+    assert_int_equal(aqs_linkage_get_query_stats(NULL, &cs), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_query_stats(L, NULL), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "stats is NULL");
+    cs.size = 7;
+    assert_int_equal(aqs_linkage_get_query_stats(L, &cs), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "stats->size = 7");
+    cs.size = sizeof cs; /* before any query: zeros */
+    assert_int_equal(aqs_linkage_get_query_stats(L, &cs), AQS_OK);
+    assert_int_equal(cs.size, sizeof cs);
+    assert_true(cs.nodes_refit == 0 && cs.volume_tests == 0 && cs.near_tests == 0);
+    assert_int_equal(aqs_linkage_set_collide_joined(L, 1), AQS_OK);
+    for (k = 0; k < 3; k++) {
+        double q = 0.05 * (k + 1);
+        assert_true(count_contacts(L) > 0);
+        cs.size = sizeof cs;
+        assert_int_equal(aqs_linkage_get_query_stats(L, &cs), AQS_OK);
+        assert_int_equal(aqs_linkage_get_collision_stats(L, &st[0], &st[1], &st[2], &st[3]), AQS_OK);
+        assert_int_equal(cs.nodes_refit, st[0]);
+        assert_int_equal(cs.volume_tests, st[1]);
+        assert_int_equal(cs.narrow_tests, st[2]);
+        assert_int_equal(cs.nodes_skipped, st[3]);
+        assert_int_equal(cs.certs_reused, L->col->certs_reused);
+        assert_int_equal(cs.certs_made, L->col->certs_made);
+        assert_int_equal(cs.near_tests, L->col->near_tests);
+        assert_true(cs.narrow_tests >= 5); /* the touching neighbours reached libccd */
+        assert_int_equal(aqs_joint_set_position(L, 2, &q, 1), AQS_OK);
+    }
+    /* an older caller's smaller struct: only what its size covers */
+    memset(&small, 0x5a, sizeof small);
+    small.size = 12;
+    assert_int_equal(aqs_linkage_get_query_stats(L, &small), AQS_OK);
+    assert_int_equal(small.size, 12);
+    assert_int_equal(small.nodes_refit, cs.nodes_refit);
+    assert_int_equal(small.volume_tests, cs.volume_tests);
+    memset(&cs, 0x5a, sizeof cs);
+    assert_memory_equal(&small.narrow_tests, &cs.narrow_tests, sizeof cs - offsetof(aqs_collision_stats, narrow_tests));
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -442,6 +495,7 @@ int main(void)
         cmocka_unit_test(test_penalty_rest),
         cmocka_unit_test(test_penalty_chain_rests),
         cmocka_unit_test(test_collision_api_errors),
+        cmocka_unit_test(test_query_stats),
     };
     return cmocka_run_group_tests_name("collide", tests, NULL, NULL);
 }

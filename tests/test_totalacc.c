@@ -3,6 +3,7 @@
  * ||qdd_j||^2 over the counted joints inside C, computed from the exact
  * accelerations; T_C is upper trapezoidal; free joints do not count. */
 #include "testutil.h"
+#include "factor.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -83,7 +84,7 @@ static void test_lemma1_square_root_form(void **state)
             assert_true(nd->trows <= cols);
             /* upper triangular with rows missing: row r starts at column
              * pos[r] >= r, strictly increasing, zeros left of it */
-            totalacc_unpack(L, n, full);
+            test_unpack_factor(L, n, full);
             for (r = 0; r < nd->trows; r++) {
                 const int32_t *pos = L->t.trowpos + nd->tpos;
                 assert_true(pos[r] >= r && pos[r] < cols && (r == 0 || pos[r] > pos[r - 1]));

@@ -10,8 +10,14 @@ set -euo pipefail
 peers=0
 [ "${1:-}" = "--peers" ] && peers=1
 # cmake: the CMake consumer of tests/install/run.sh; abigail-tools: abidw/abidiff of
-# tests/abi/check.sh; libexpat1-dev: URDF loading (optional for the library, tested).
-pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config cmake abigail-tools libexpat1-dev)
+# tests/abi/check.sh; libexpat1-dev: URDF loading (optional for the library, tested). clang and its libFuzzer runtime (libclang-rt-<major>-dev, the one of
+# Debian's default clang: 14 on bookworm): make check-fuzz (docs/testing.md).
+pkgs=(libccd-dev libcmocka-dev libeigen3-dev nlohmann-json3-dev pkg-config cmake abigail-tools libexpat1-dev clang)
+if command -v clang >/dev/null; then
+    pkgs+=("libclang-rt-$(clang -dumpversion | cut -d. -f1)-dev")
+else
+    pkgs+=(libclang-rt-14-dev)
+fi
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -66,6 +66,9 @@ def test_random_positions_against_numpy_brute_force():
                 assert abs(got[key] - depth) < 1e-9
             stats = L.collision_stats()
             assert isinstance(stats, aqs.CollisionStats)
+            assert stats._fields == ("nodes_refit", "volume_tests", "narrow_tests", "nodes_skipped",
+                                     "certs_reused", "certs_made", "near_tests")
+            assert stats.narrow_tests >= len(expected) and min(stats) >= 0
 
 
 def test_obstacles_hulls_filters():

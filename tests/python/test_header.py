@@ -54,6 +54,7 @@ PARAMS = {
     "double *": [_lib.dout, _lib.dout_or_null, _lib.double_p],
     "aqs_alloc_fn": [_lib.alloc_fn], "aqs_free_fn": [_lib.free_fn],
     "aqs_solve_stats *": [ctypes.POINTER(_lib.aqs_solve_stats)],
+    "aqs_collision_stats *": [ctypes.POINTER(_lib.aqs_collision_stats)],
     "uint32_t": [ctypes.c_uint32], "aqs_contact *": [_lib.contact_p],
     "size_t *": [_lib.size_p],
     "const char *": [ctypes.c_char_p], "const char **": [ctypes.POINTER(ctypes.c_char_p)],
@@ -63,7 +64,8 @@ PARAMS = {
 FIELD_TYPES = {"uint32_t": ctypes.c_uint32, "int32_t": ctypes.c_int32, "double": ctypes.c_double}
 #: Each struct of the header -> its ctypes.Structure.
 STRUCTS = {"aqs_solve_stats": _lib.aqs_solve_stats, "aqs_contact": _lib.aqs_contact,
-           "aqs_urdf_options": _lib.aqs_urdf_options}
+           "aqs_urdf_options": _lib.aqs_urdf_options,
+           "aqs_collision_stats": _lib.aqs_collision_stats}
 
 
 def normalize(c_type):
@@ -130,3 +132,4 @@ def test_structs_match(header):
     assert ctypes.sizeof(stats) == 56
     assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
     assert stats.fallback.offset == 44 and stats.factors_updated.offset == 52
+    assert ctypes.sizeof(_lib.aqs_collision_stats) == 32  # eight 4-byte fields

@@ -117,9 +117,9 @@ _F64 = np.float64
 CONTACT_DTYPE = np.dtype([(name, np.int32 if ctype is ctypes.c_int32 else np.float64)
                           for name, ctype in _lib.aqs_contact._fields_])
 assert CONTACT_DTYPE.itemsize == ctypes.sizeof(_lib.aqs_contact)
-CollisionStats = collections.namedtuple("CollisionStats",
-                                        "nodes_refit volume_tests narrow_tests nodes_skipped")
-CollisionStats.__doc__ = "Work of the last collision query (aqs_linkage_get_collision_stats)."
+CollisionStats = collections.namedtuple("CollisionStats", [name for name, _ in
+                                                          _lib.aqs_collision_stats._fields_[1:]])
+CollisionStats.__doc__ = "Work of the last collision query (aqs_linkage_get_query_stats)."
 
 Sizes = collections.namedtuple("Sizes", "bodies joints nq nv")
 Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (accelerations)."
@@ -1132,10 +1132,13 @@ class Linkage:
         self._call(f, _number(stiffness, f, "stiffness"))
 
     def collision_stats(self):
-        """Work of the last collision query (aqs_linkage_get_collision_stats)."""
-        values = [ctypes.c_int32() for _ in range(4)]
-        self._call("aqs_linkage_get_collision_stats", *[ctypes.byref(v) for v in values])
-        return CollisionStats(*(v.value for v in values))
+        """Work of the last collision query (aqs_linkage_get_query_stats): a
+        CollisionStats (nodes_refit, volume_tests, narrow_tests, nodes_skipped,
+        certs_reused, certs_made, near_tests)."""
+        c = _lib.aqs_collision_stats()
+        c.size = ctypes.sizeof(c)
+        self._call("aqs_linkage_get_query_stats", ctypes.byref(c))
+        return CollisionStats(*(getattr(c, name) for name in CollisionStats._fields))
 
 def _locked(function):
     """function, run with its linkage's lock held."""

@@ -205,6 +205,21 @@ class aqs_urdf_options(ctypes.Structure):
 urdf_options_p = ctypes.POINTER(aqs_urdf_options)
 
 
+class aqs_collision_stats(ctypes.Structure):
+    """struct aqs_collision_stats, field for field (the caller sets size)."""
+
+    _fields_ = [
+        ("size", ctypes.c_uint32),  # set by the caller: sizeof(aqs_collision_stats)
+        ("nodes_refit", ctypes.c_int32),
+        ("volume_tests", ctypes.c_int32),
+        ("narrow_tests", ctypes.c_int32),
+        ("nodes_skipped", ctypes.c_int32),
+        ("certs_reused", ctypes.c_int32),
+        ("certs_made", ctypes.c_int32),
+        ("near_tests", ctypes.c_int32),
+    ]
+
+
 class aqs_contact(ctypes.Structure):
     """struct aqs_contact, field for field."""
 
@@ -361,6 +376,7 @@ PROTOTYPES = {
                                        size_p]),
     "aqs_linkage_any_contact": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_get_collision_stats": (status_t, [linkage_p, int32_p, int32_p, int32_p, int32_p]),
+    "aqs_linkage_get_query_stats": (status_t, [linkage_p, ctypes.POINTER(aqs_collision_stats)]),
     "aqs_linkage_set_contact_stiffness": (status_t, [linkage_p, ctypes.c_double]),
 }
 
