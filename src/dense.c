@@ -1,6 +1,7 @@
 /* dense.c -- small dense kernels. */
 #include "dense.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -324,7 +325,16 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
         a = D + (long)j * p + s;
         for (i = 0; i < q; i++)
             if (fabs(a[i]) > scale) scale = fabs(a[i]);
-        if (scale == 0.0) { rows += pr != 0; continue; }
+        if (scale < DBL_MIN) {
+            /* nothing below the pivot, or only subnormal residue of exact zeros
+             * (a nearly straight chain leaves some): such entries carry too few
+             * bits for a reflection to stay orthogonal (its alpha would round to
+             * the subnormal grid), and their squares are below DBL_MIN^2: they
+             * are dropped */
+            for (i = 0; i < q; i++) a[i] = 0.0;
+            rows += pr != 0;
+            continue;
+        }
         if (!pr && q == 1) {
             /* the last live row, alone in column j: it becomes R's row j as is
              * (dlarfg's tau = 0 when nothing is below the pivot) */
@@ -339,7 +349,7 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
         if (fabs(top) > scale) scale = fabs(top);
         i0 = pr ? 0 : 1;
         {
-            const double inv = 1.0 / scale;
+            const double inv = 1.0 / scale; /* finite: scale >= DBL_MIN */
             for (i = i0; i < q; i++) norm += (a[i] * inv) * (a[i] * inv);
             norm += (top * inv) * (top * inv);
         }
@@ -350,7 +360,7 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
          * dlarfg scaling) and tau = -v0 / alpha in [1, 2] */
         tau = -v0 / alpha;
         {
-            const double iv = 1.0 / v0;
+            const double iv = 1.0 / v0; /* |v0| >= scale >= DBL_MIN */
             for (i = i0; i < q; i++) a[i] *= iv;
         }
         if (pr) reflect_columns(a + i0, q - i0, tau, rj + j + 1, 1, D + (long)(j + 1) * p + s + i0, p, n - j - 1);

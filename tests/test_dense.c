@@ -409,6 +409,33 @@ static void test_qr_append(void **state)
     }
 }
 
+/* Subnormal entries (the rounding residue of exact zeros, as a nearly straight
+ * chain leaves them) must not turn into NaN (1 / a subnormal overflows, and
+ * inf * 0 is NaN) nor into a reflection that is not orthogonal (its alpha
+ * would round to the subnormal grid: the Gram matrix's 1.49 came back as
+ * 1.4899999981 before they were dropped). Every entry stays finite and the
+ * Gram matrix D^T D + R^T R is kept to 1e-13 of its largest entry. */
+static void test_qr_append_subnormal(void **state)
+{
+    const int n = 4, p = 3;
+    int present[4] = {1, 0, 0, 1}, i, j, copy[4];
+    double R[16] = {0}, D[12], G0[16], G1[16], scale = 0.0;
+    (void)state;
+    R[0] = 2.0, R[1] = 0.5, R[15] = 1.0;
+    for (j = 0; j < n; j++)
+        for (i = 0; i < p; i++) D[j * p + i] = (i + j) % 2 ? 3e-316 * (i + 1) : (j == 3 ? 0.7 : 0.0);
+    memcpy(copy, present, sizeof copy);
+    gram(R, present, n, D, p, G0);
+    dense_qr_append(R, n, present, D, p);
+    gram(R, present, n, NULL, 0, G1);
+    for (i = 0; i < n * n; i++) {
+        assert_true(isfinite(R[i]));
+        scale = fmax(scale, fabs(G0[i]));
+    }
+    for (i = 0; i < n * n; i++) assert_true(fabs(G1[i] - G0[i]) <= 1e-13 * scale);
+    (void)copy;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -420,6 +447,7 @@ int main(void)
         cmocka_unit_test(test_spd_inverse_fallback_ill_conditioned),
         cmocka_unit_test(test_spd_inverse_failures),
         cmocka_unit_test(test_qr_append),
+        cmocka_unit_test(test_qr_append_subnormal),
     };
     return cmocka_run_group_tests_name("dense", tests, NULL, NULL);
 }
