@@ -152,6 +152,8 @@ static int mp_inverse_factor(const double *mp, double *Y)
     const double m = mp[0], *c = mp + 1, *Ic = mp + 4;
     double l00, l10, l11, l20, l21, l22, Li[9], Jc[9], S[9];
     int i, j, k;
+    for (i = 0; i < 13; i++) /* a part 1e300 m out: its inertia overflowed */
+        if (!isfinite(mp[i])) return -1;
     if (!(m > 0.0)) return -1;
     l00 = Ic[0];
     if (!(l00 > 0.0)) return -1;
@@ -489,6 +491,13 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
 
     pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
     pose_compose(&Pk, &PB[C->kb], &Pkb);
+    /* Frames farther out than 1e150 m leave no digit of the metre-sized
+     * geometry (and m r^2 overflows past 1e154): numerically singular, as the
+     * articulated-body and the inverse-inertia forms find by overflow. */
+    for (ci = 0; ci <= nh; ci++) {
+        const double *p = ci < nh ? P[ci].p : Pkb.p;
+        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
+    }
     memset(IB, 0, sizeof IB);
     mp_add_posed(IB, &Pk, IBb);
     C->grounded = A->grounded || B->grounded;
