@@ -3,6 +3,7 @@
  * the obstacles live in the world's leaf). The brute-force all-pairs query
  * is here too, as the reference the tree query must reproduce exactly. */
 #include "collide.h"
+#include "invariant.h"
 
 #include <math.h>
 #include <string.h>
@@ -116,7 +117,25 @@ static void world_centre(const double *s, const pose *W, double out[3])
 
 /* ------------------------------------------------------------ state */
 
-static void forget_built(collision *c);
+/* Forget the built data of c without freeing it (a copy holds it). */
+static void forget_built(collision *c)
+{
+    c->shape_in = NULL;
+    c->comp_start = c->comp_shapes = NULL;
+    c->sph = c->centres = NULL;
+    c->moved = c->cached = NULL;
+    c->ncont = c->xoff = c->xcnt = c->noff = c->ncnt = NULL;
+    memset(&c->xp, 0, sizeof c->xp);
+    memset(&c->np, 0, sizeof c->np);
+    c->mabs = c->mrel = c->mchild = c->mcert = c->margin = NULL;
+    c->cert = NULL;
+    c->comp_world = c->pk = c->wpose = NULL;
+    c->wcen = NULL;
+    c->wstamp = NULL;
+    c->qstamp = 0;
+    c->placed = NULL;
+    c->built = 0;
+}
 
 /* Free the built data of c (L->col or a saved copy of it) and forget it. */
 static void release(aqs_linkage *L, collision *c)
@@ -150,26 +169,6 @@ static void release(aqs_linkage *L, collision *c)
     lk_free(L, c->placed);
     lk_free(L, c->centres);
     forget_built(c);
-}
-
-/* Forget the built data of c without freeing it (a copy holds it). */
-static void forget_built(collision *c)
-{
-    c->shape_in = NULL;
-    c->comp_start = c->comp_shapes = NULL;
-    c->sph = c->centres = NULL;
-    c->moved = c->cached = NULL;
-    c->ncont = c->xoff = c->xcnt = c->noff = c->ncnt = NULL;
-    memset(&c->xp, 0, sizeof c->xp);
-    memset(&c->np, 0, sizeof c->np);
-    c->mabs = c->mrel = c->mchild = c->mcert = c->margin = NULL;
-    c->cert = NULL;
-    c->comp_world = c->pk = c->wpose = NULL;
-    c->wcen = NULL;
-    c->wstamp = NULL;
-    c->qstamp = 0;
-    c->placed = NULL;
-    c->built = 0;
 }
 
 void broadphase_reset(aqs_linkage *L)
@@ -766,5 +765,7 @@ size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
 
 void broadphase_penalty(aqs_linkage *L)
 {
+    /* with stiffness set, shapes are never left unbuilt (push_shape, the setter) */
+    AQS_ASSERT(L->col->built || L->col->nshapes == 0);
     if (L->col->built && L->col->nshapes > 0) (void)run_query(L, AQS_COLLIDE_LAZY, NULL, 0, 0, 1);
 }
