@@ -12,7 +12,6 @@
 #include "stale.h"
 #include "update.h"
 
-static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp);
 static int mp_inverse_factor(const double *mp, double *Y);
 static int mp_inverse(const double *mp, double *Iinv);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
@@ -47,7 +46,7 @@ static void dca_leaf_phi(aqs_linkage *L, int32_t n)
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
     nd->grounded = nd->comp == L->m.ncomp;
     if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
-    else mp_of_comp(L, nd->comp, t->data + nd->ic);
+    else model_comp_mass(L, nd->comp, t->data + nd->ic);
 }
 
 void dca_leaf_b(aqs_linkage *L, int32_t n)
@@ -83,67 +82,6 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
  * (only sums of positive terms), and inverted through the centre of mass:
  * I^-1 = E^T diag(Ic^-1, 1/m) E exactly, so neither a lever arm nor a tiny
  * Ic costs digits (a 6x6 Cholesky of I in a far frame does). */
-
-/* acc += (m2, c2, I2): the two-body rule Ic = I1 + I2 + (m1 m2 / m) (|e|^2 - e e^T), e = c2 - c1. */
-static void mp_add(double *acc, double m2, const double c2[3], const double I2[9])
-{
-    double m1 = acc[0], m = m1 + m2, e[3], f, e2;
-    int i, j;
-    if (m1 == 0.0) {
-        acc[0] = m2;
-        memcpy(acc + 1, c2, 3 * sizeof(double));
-        memcpy(acc + 4, I2, 9 * sizeof(double));
-        return;
-    }
-    for (i = 0; i < 3; i++) e[i] = c2[i] - acc[1 + i];
-    f = m1 * m2 / m;
-    e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) acc[4 + 3 * i + j] += I2[3 * i + j] + f * ((i == j ? e2 : 0.0) - e[i] * e[j]);
-    for (i = 0; i < 3; i++) acc[1 + i] = (m1 * acc[1 + i] + m2 * c2[i]) / m;
-    acc[0] = m;
-    for (i = 0; i < 3; i++) /* exactly symmetric */
-        for (j = i + 1; j < 3; j++) acc[4 + 3 * j + i] = acc[4 + 3 * i + j];
-}
-
-/* acc += mp given in a frame with pose P in acc's frame. */
-static void mp_add_posed(double *acc, const pose *P, const double *mp)
-{
-    double c[3], RI[9], I[9];
-    int i, j, k;
-    mat3_vec(P->R, mp + 1, c);
-    for (i = 0; i < 3; i++) c[i] += P->p[i];
-    for (i = 0; i < 3; i++) /* R Ic R^T */
-        for (j = 0; j < 3; j++) {
-            double s = 0.0;
-            for (k = 0; k < 3; k++) s += P->R[3 * i + k] * mp[4 + 3 * k + j];
-            RI[3 * i + j] = s;
-        }
-    for (i = 0; i < 3; i++)
-        for (j = i; j < 3; j++) {
-            double s = 0.0;
-            for (k = 0; k < 3; k++) s += RI[3 * i + k] * P->R[3 * j + k];
-            I[3 * i + j] = I[3 * j + i] = s;
-        }
-    mp_add(acc, mp[0], c, I);
-}
-
-/* The composite's mass properties in its frame (its root body's), from its bodies. */
-static void mp_of_comp(const aqs_linkage *L, int32_t comp, double *mp)
-{
-    const model *m = &L->m;
-    int32_t k;
-    memset(mp, 0, 13 * sizeof(double));
-    for (k = m->member_start[comp]; k < m->member_start[comp + 1]; k++) {
-        int32_t b = m->members[k];
-        const body_def *bd = &L->bodies[b];
-        double one[13];
-        one[0] = bd->mass;
-        memcpy(one + 1, bd->com, 3 * sizeof(double));
-        memcpy(one + 4, bd->inertia, 9 * sizeof(double));
-        mp_add_posed(mp, &m->body_in_comp[b], one);
-    }
-}
 
 /* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
  * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
@@ -499,12 +437,12 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
     }
     memset(IB, 0, sizeof IB);
-    mp_add_posed(IB, &Pk, IBb);
+    model_mass_add_posed(IB, &Pk, IBb);
     C->grounded = A->grounded || B->grounded;
     memset(IC, 0, 13 * sizeof(double));
     if (!C->grounded) {
         memcpy(IC, IA, 13 * sizeof(double));
-        mp_add(IC, IB[0], IB + 1, IB + 4);
+        model_mass_add(IC, IB[0], IB + 1, IB + 4);
     }
     /* The relative rigid mode, in square-root form, in the frame F at the
      * centre of mass of the side with the larger mobility (C's axes): there

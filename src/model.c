@@ -2,6 +2,7 @@
  * the welding of fixed joints into rigid groups ("composites"). */
 #include "model.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -89,25 +90,83 @@ aqs_status model_check_body(aqs_linkage *L, const char *fn, double mass, const d
  * the off-diagonal block. Its smallest principal moment must exceed 1e-12 of
  * tr(I_O): the rounding of I_c's computation is ~1e-16 tr(I_O), so a point
  * mass alone (I_c = 0 exactly) can never pass as definite. */
-static int rotational_inertia_definite(const double I[36])
+/* acc += (m2, c2, I2): the two-body rule Ic = I1 + I2 + (m1 m2 / m) (|e|^2 - e e^T), e = c2 - c1. */
+void model_mass_add(double *acc, double m2, const double c2[3], const double I2[9])
 {
-    double mass = I[21], c[3], Ic[9], ev[3], trace;
-    int r, k;
-    if (!(mass > 0.0)) return 0;
-    /* top-right block m [c]x = [0 -m cz m cy; m cz 0 -m cx; -m cy m cx 0] */
-    c[0] = I[6 * 2 + 4] / mass;
-    c[1] = I[6 * 0 + 5] / mass;
-    c[2] = I[6 * 1 + 3] / mass;
-    for (r = 0; r < 3; r++)
-        for (k = 0; k < 3; k++) Ic[3 * r + k] = I[6 * r + k];
-    /* [c]x [c]x = c c^T - |c|^2 1 */
-    for (r = 0; r < 3; r++)
-        for (k = 0; k < 3; k++)
-            Ic[3 * r + k] += mass * (c[r] * c[k] - (r == k ? c[0] * c[0] + c[1] * c[1] + c[2] * c[2] : 0.0));
-    dense_symmetrize(Ic, 3);
-    sym3_eigenvalues(Ic, ev);
-    trace = I[0] + I[7] + I[14];
-    return isfinite(ev[0]) && ev[0] > 1e-12 * trace;
+    double m1 = acc[0], m = m1 + m2, e[3], f, e2;
+    int i, j;
+    if (m1 == 0.0) {
+        acc[0] = m2;
+        memcpy(acc + 1, c2, 3 * sizeof(double));
+        memcpy(acc + 4, I2, 9 * sizeof(double));
+        return;
+    }
+    for (i = 0; i < 3; i++) e[i] = c2[i] - acc[1 + i];
+    f = m1 * m2 / m;
+    e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) acc[4 + 3 * i + j] += I2[3 * i + j] + f * ((i == j ? e2 : 0.0) - e[i] * e[j]);
+    for (i = 0; i < 3; i++) acc[1 + i] = (m1 * acc[1 + i] + m2 * c2[i]) / m;
+    acc[0] = m;
+    for (i = 0; i < 3; i++) /* exactly symmetric */
+        for (j = i + 1; j < 3; j++) acc[4 + 3 * j + i] = acc[4 + 3 * i + j];
+}
+
+/* acc += mp given in a frame with pose P in acc's frame. */
+void model_mass_add_posed(double *acc, const pose *P, const double *mp)
+{
+    double c[3], RI[9], I[9];
+    int i, j, k;
+    mat3_vec(P->R, mp + 1, c);
+    for (i = 0; i < 3; i++) c[i] += P->p[i];
+    for (i = 0; i < 3; i++) /* R Ic R^T */
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += P->R[3 * i + k] * mp[4 + 3 * k + j];
+            RI[3 * i + j] = s;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s += RI[3 * i + k] * P->R[3 * j + k];
+            I[3 * i + j] = I[3 * j + i] = s;
+        }
+    model_mass_add(acc, mp[0], c, I);
+}
+
+/* The composite's mass properties in its frame (its root body's), from its bodies. */
+void model_comp_mass(const aqs_linkage *L, int32_t comp, double *mp)
+{
+    const model *m = &L->m;
+    int32_t k;
+    memset(mp, 0, 13 * sizeof(double));
+    for (k = m->member_start[comp]; k < m->member_start[comp + 1]; k++) {
+        int32_t b = m->members[k];
+        const body_def *bd = &L->bodies[b];
+        double one[13];
+        one[0] = bd->mass;
+        memcpy(one + 1, bd->com, 3 * sizeof(double));
+        memcpy(one + 4, bd->inertia, 9 * sizeof(double));
+        model_mass_add_posed(mp, &m->body_in_comp[b], one);
+    }
+}
+
+/* The rigid group's rotational inertia about its centre of mass, summed from
+ * its bodies (model_mass_add: positive terms only, so a near point mass's
+ * k I keeps its digits), is definite: its smallest eigenvalue above 64 ulps
+ * of its trace (a lone body of inertia 1e-16 I passes; two welded point
+ * masses have a rotational inertia of rounding size about their line and do
+ * not). */
+static int rotational_inertia_definite(const double *mp)
+{
+    double ev[3], trace;
+    int r;
+    for (r = 0; r < 13; r++)
+        if (!isfinite(mp[r])) return 0;
+    if (!(mp[0] > 0.0)) return 0;
+    sym3_eigenvalues(mp + 4, ev);
+    trace = mp[4] + mp[8] + mp[12];
+    return isfinite(ev[0]) && ev[0] > 64 * DBL_EPSILON * trace;
 }
 
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
@@ -199,6 +258,7 @@ aqs_status model_build(aqs_linkage *L)
     model *m = &L->m;
     int32_t nb = L->nbodies, nj = L->njoints, i, k;
     int32_t *first_child = NULL, *next_sibling = NULL;
+    double *cmass = NULL; /* (ncomp + 1) x 13: each composite's mass properties */
     aqs_status st;
     memset(m, 0, sizeof *m);
     m->comp_of_body = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
@@ -259,19 +319,30 @@ aqs_status model_build(aqs_linkage *L)
         st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
         goto fail;
     }
-    /* Inertia of each composite in its root body's frame. */
+    /* Inertia of each composite in its root body's frame, and its mass
+     * properties (for the definiteness check). */
+    cmass = lk_calloc(L, (size_t)m->ncomp + 1, 13 * sizeof(double));
+    if (!cmass) {
+        st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
+        goto fail;
+    }
     for (k = 0; k < nb; k++) {
         int32_t b = m->order[k], c = m->comp_of_body[b];
-        double Ib[36], Ic[36];
+        double Ib[36], Ic[36], one[13];
+        const body_def *bd = &L->bodies[b];
         if (c == m->ncomp) continue;
         if (L->joints[m->parent_joint[b]].type != AQS_JOINT_FIXED) m->comp_root[c] = b;
         model_body_inertia(L, b, Ib);
         spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
         for (i = 0; i < 36; i++) m->comp_inertia[36 * c + i] += Ic[i];
+        one[0] = bd->mass;
+        memcpy(one + 1, bd->com, 3 * sizeof(double));
+        memcpy(one + 4, bd->inertia, 9 * sizeof(double));
+        model_mass_add_posed(cmass + 13 * c, &m->body_in_comp[b], one);
     }
     for (i = 0; i < m->ncomp; i++) {
         double mass = m->comp_inertia[36 * i + 21]; /* the (3,3) entry is the total mass */
-        if (!(mass > 0.0) || !rotational_inertia_definite(m->comp_inertia + 36 * i) ||
+        if (!(mass > 0.0) || !rotational_inertia_definite(cmass + 13 * i) ||
             dense_spd_inverse(m->comp_inertia + 36 * i, m->comp_inverse + 36 * i, 6) != 0) {
             const char *name = lk_body_name(L, m->comp_root[i]);
             int32_t count = 0;
@@ -327,10 +398,12 @@ aqs_status model_build(aqs_linkage *L)
     }
     lk_free(L, first_child);
     lk_free(L, next_sibling);
+    lk_free(L, cmass);
     return AQS_OK;
 fail:
     lk_free(L, first_child);
     lk_free(L, next_sibling);
+    lk_free(L, cmass);
     model_free(L);
     return st;
 }

@@ -14,5 +14,12 @@ aqs_status model_build(aqs_linkage *L);
 void model_free(aqs_linkage *L);
 /* Spatial inertia of a body about its own origin, body frame. */
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36]);
+/* Mass properties mp (13 doubles: mass, centre of mass, rotational inertia
+ * about it, 3x3 row-major) combined by the two-body parallel-axis rule, only
+ * sums of positive terms: acc += (m2, c2, I2), acc += mp posed by P in acc's
+ * frame, and a composite's from its bodies (in its root body's frame). */
+void model_mass_add(double *acc, double m2, const double c2[3], const double I2[9]);
+void model_mass_add_posed(double *acc, const pose *P, const double *mp);
+void model_comp_mass(const aqs_linkage *L, int32_t comp, double *mp);
 
 #endif
