@@ -271,6 +271,35 @@ def test_exact_by_default_and_with_eps_zero():
         assert stats_again.nodes_updated == 0
 
 
+def test_dca_forms():
+    """set_dca_form: "sqrt" by default, "phi" (or aqs.DCA_FORM_PHI) before finalize;
+    both forms' exact DCA and adaptive solves agree with the exact vector (SAME);
+    a bad name, a bool or a string number, and a call after finalize are refused
+    with the linkage unchanged."""
+    name = "tree-60-mixed"
+    case, acc, forces = exact(name)
+    for form in ("sqrt", "phi", aqs.DCA_FORM_PHI):
+        L = aqs.Linkage()
+        assert L.dca_form == "sqrt"
+        with pytest.raises(aqs.InvalidArgument, match="form"):
+            L.set_dca_form("cholesky")
+        with pytest.raises(TypeError):
+            L.set_dca_form(True)
+        assert L.dca_form == "sqrt"
+        L.set_dca_form(form)
+        with build(aqs, case, linkage=L):
+            assert L.dca_form == ("phi" if form == aqs.DCA_FORM_PHI else form)
+            with pytest.raises(aqs.StateError, match="finalized"):
+                L.set_dca_form("sqrt")
+            assert L.dca_form == ("phi" if form == aqs.DCA_FORM_PHI else form)
+            L.set_exact_solver("dca")
+            L.solve()
+            assert rel_err(L.accelerations(), acc) <= SAME
+            L.set_tolerance("rel_joint", 2.0 ** -5)
+            stats = L.solve()
+            assert stats.computed_joints < stats.counted_joints and stats.error_bound <= 2.0 ** -5
+
+
 def test_exact_fallback():
     """set_exact_fallback: after an adaptive solve that computed more than the
     fraction of the joints, FALLBACK_RUN exact solves (the exact accelerations
