@@ -13,7 +13,6 @@
 #include "update.h"
 
 static int mp_inverse_factor(const double *mp, double *Y);
-static int mp_inverse(const double *mp, double *Iinv);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
 
 static void dca_leaf_phi(aqs_linkage *L, int32_t n);
@@ -64,10 +63,16 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         acc[4] = -L->gravity[1];
         acc[5] = -L->gravity[2];
     } else {
-        double Iinv[36];
-        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse(t->data + nd->ic, Iinv) != 0)
-            memcpy(Iinv, L->m.comp_inverse + 36 * nd->comp, sizeof Iinv);
-        dense_matvec(Iinv, L->m.comp_force + 6 * nd->comp, acc, 6, 6);
+        const double *f = L->m.comp_force + 6 * nd->comp;
+        double Y[36], w[6];
+        /* acc = I^-1 f = Y (Y^T f), through the centre of mass (the square-root
+         * form's mass properties); the inverse-inertia form keeps finalize's */
+        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd->ic, Y) != 0) {
+            dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, acc, 6, 6);
+        } else {
+            dense_tmatvec6(Y, f, w);
+            dense_matvec6(Y, w, acc);
+        }
     }
     for (i = 0; i < nd->nh; i++) {
         spatial_from_parent(&P[i], X);
@@ -127,21 +132,6 @@ static int mp_inverse_factor(const double *mp, double *Y)
             Y[6 * (3 + i) + j] = s;
         }
     for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = 1.0 / sqrt(m);
-    return 0;
-}
-
-/* I^-1 = Y Y^T, exactly symmetric. */
-static int mp_inverse(const double *mp, double *Iinv)
-{
-    double Y[36];
-    int i, j, k;
-    if (mp_inverse_factor(mp, Y) != 0) return -1;
-    for (i = 0; i < 6; i++)
-        for (j = i; j < 6; j++) {
-            double s = 0.0;
-            for (k = 0; k < 6; k++) s += Y[6 * i + k] * Y[6 * j + k];
-            Iinv[6 * i + j] = Iinv[6 * j + i] = s;
-        }
     return 0;
 }
 
