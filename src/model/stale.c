@@ -1,4 +1,4 @@
-/* stale.c -- the one owner of "what is stale" (src/stale.h). */
+/* stale.c -- the one owner of "what is stale" (src/model/stale.h). */
 #include "stale.h"
 
 #include "update.h"

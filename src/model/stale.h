@@ -43,7 +43,7 @@ void stale_set_refinable(aqs_linkage *L, int refinable);
 /* A full update recomputes every load and the gravity term as well. */
 void stale_loads_all(aqs_linkage *L);
 
-/* Reports of the recomputations (src/update.c). */
+/* Reports of the recomputations (src/solve/update.c). */
 void stale_gravity_fresh(aqs_linkage *L); /* update_loads: the world leaf's gravity term */
 void stale_loads_fresh(aqs_linkage *L);   /* update_loads: the composites' loads */
 void stale_tree_fresh(aqs_linkage *L);    /* update_coefficients: every marked node done */
