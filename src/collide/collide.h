@@ -69,7 +69,7 @@ void collide_free(aqs_linkage *L);
 void broadphase_reset(aqs_linkage *L);
 /* Forget which subassemblies were free of contact (filters changed). */
 void broadphase_forget(aqs_linkage *L);
-/* The cross poses of internal node n changed (src/solve/update.c): mark it and its
+/* The cross poses of internal node n changed (src/solve/frames.c): mark it and its
  * ancestors for refitting. O(1) amortized. */
 void broadphase_node_moved(aqs_linkage *L, int32_t n);
 /* Build the per-node data if needed. AQS_OK or AQS_ENOMEM (message set, nothing changed). */

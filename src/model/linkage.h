@@ -209,10 +209,19 @@ struct aqs_linkage {
     char *load_warnings;  /* what the last URDF load did not model (src/api/urdf.c); NULL = none */
 };
 
-/* The name of a body / joint, or NULL (src/api/names.c). */
-const char *lk_body_name(const aqs_linkage *L, int32_t body);
-const char *lk_joint_name(const aqs_linkage *L, int32_t joint);
-/* Release the names and the load warnings (aqs_linkage_destroy). */
+/* The name of a body / joint, or NULL (set by src/api/names.c; model.c's messages read
+ * them, so they are here, below the public face). */
+static inline const char *lk_body_name(const aqs_linkage *L, int32_t body)
+{
+    if (!L->body_name || body < 0 || body >= L->body_name_cap) return NULL;
+    return L->body_name[body];
+}
+static inline const char *lk_joint_name(const aqs_linkage *L, int32_t joint)
+{
+    if (!L->joint_name || joint < 0 || joint >= L->joint_name_cap) return NULL;
+    return L->joint_name[joint];
+}
+/* Release the names and the load warnings (aqs_linkage_destroy; src/api/names.c). */
 void lk_names_free(aqs_linkage *L);
 
 /* Memory through the linkage's allocator. */

@@ -129,7 +129,7 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
     int32_t nAo = nA - 1, i, j, ci, cj;
     double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
 
-    /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
+    /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
 

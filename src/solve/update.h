@@ -1,35 +1,10 @@
-/* update.h -- hierarchical frames (MATH.md §9.2), world poses on request,
- * re-expression of world-frame loads, and the coefficient update (§9.1). */
+/* update.h -- re-expression of world-frame loads and the lazy coefficient
+ * update (MATH.md §9.1); the frames are in frames.h. */
 #ifndef AQS_UPDATE_H
 #define AQS_UPDATE_H
 
 #include "linkage.h"
 
-/* Handle-frame poses of a leaf in its composite's frame (constant). */
-void update_leaf_poses(aqs_linkage *L, int32_t n);
-/* Cross poses of an internal node from its children and q_k, and J(q_k)
- * itself (the child frame of k in its joint frame, which dca_node_update
- * reads): call whenever q_k or a position inside the node changes. */
-void update_node_poses(aqs_linkage *L, int32_t n);
-/* All internal nodes' cross poses, children first. O(N). */
-void update_all_poses(aqs_linkage *L);
-/* Cross poses of the node of effective joint e and its ancestors. O(log N). */
-void update_poses_from_joint(aqs_linkage *L, int32_t e);
-
-/* World pose of a composite's frame (world: identity), O(log N). */
-void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P);
-/* World pose of a body, O(log N). */
-void update_body_pose_world(const aqs_linkage *L, int32_t body, pose *P);
-/* World poses of all bodies, parents before children, O(N). */
-void update_all_body_poses_world(const aqs_linkage *L, pose *out);
-
-/* The load of a body as a spatial force in its composite's frame, given the
- * composite's world pose. */
-void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
-                              double f[6]);
-/* Mark node n and its ancestors stale (MATH.md §9.1). O(log N), less when
- * an ancestor is already marked. */
-void update_mark(aqs_linkage *L, int32_t n);
 /* When loads changed (or positions moved, loads_dirty): re-express every
  * body load in its composite's frame, refresh those leaves (and the world
  * leaf when gravity changed) and mark their ancestors. O(N_U log N). */
