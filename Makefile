@@ -1,7 +1,7 @@
 # aqs -- adaptive quasi-statics. See README.md.
 #   make            build/libaqs.so.X.Y.Z and build/libaqs.a (needs only a C compiler and
 #                   libccd; installs nothing)
-#   make check      every test (C, C++ reference, Python, install, ABI, a short fuzz run);
+#   make check      every test (layers, C, C++ reference, Python, install, ABI, a short fuzz run);
 #                   SANITIZE=1 under ASan/UBSan, DEBUG=1 at -O0; both check src/base/invariant.h's asserts
 #   make fuzz       build/fuzz/aqs_fuzz, the libFuzzer target (clang; docs/testing.md)
 #   make demo       the README's "run it" command
@@ -101,7 +101,7 @@ BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c) bench/c
 BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
-.PHONY: all lib check check-c check-reference check-python check-install check-symbols \
+.PHONY: all lib check check-c check-reference check-python check-install check-symbols check-layers \
         check-abi abi-baseline deps demo bench bench-scaling bench-plots bench-collide \
         check-bench install uninstall clean
 
@@ -172,8 +172,17 @@ $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.h
 	@$(CXX) $(CXXFLAGS_TEST) $(CPPFLAGS) $(CXXFLAGS) $(LDFLAGS) -o $@ $< -L$(BUILD) \
 	    -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench check-fuzz
+check: check-layers check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench check-fuzz
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
+
+# One-way layers (src/LAYERS, docs/design.md): every call between the objects goes down a
+# layer or to a sibling its line lists, checked from the objects' undefined symbols; then
+# the checker's own test (generated objects and bad maps that must fail).
+check-layers: $(OBJS)
+	@$(PYTHON) tests/check_layers.py --layers src/LAYERS --src src --objdir $(BUILD)/obj
+	@$(PYTHON) tests/check_layers_test.py "$(CC)" $(BUILD)/obj > $(BUILD)/check_layers_test.log \
+	    || { cat $(BUILD)/check_layers_test.log; exit 1; }
+	@tail -n 1 $(BUILD)/check_layers_test.log
 
 # Exports of the shared library; globals of the static library (all aqs-prefixed, and a
 # program defining the internal archive's names links against it).
