@@ -343,6 +343,7 @@ def test_prediction(name, metric):
             with pytest.raises(aqs.InvalidArgument, match="margin"):
                 L.set_prediction(bad)
         assert L.prediction == aqs.PREDICTION_MARGIN
+        L.set_auto(False)  # the adaptive solver's own prediction
         L.set_tolerance(metric, 2.0 ** -20)
         first = L.solve()
         assert first.nodes_predicted == 0
@@ -550,6 +551,7 @@ def test_adaptive_step_moves_only_computed_joints():
     case, _, _ = exact(name)
     with build(aqs, case) as L:
         layouts = [L.joint_layout(k) for k in range(len(case["joints"]))]
+        L.set_auto(False)  # an adaptive step as such (on 300 joints the exact one is cheaper)
         L.set_tolerance("rel_linkage", 2.0 ** -5)
         L.solve()  # builds every node's factors: the step's own solve updates nothing
         before = L.positions().copy()
@@ -577,8 +579,8 @@ def test_adaptive_step_moves_only_computed_joints():
 def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
              "nodes_updated", "nodes_processed", "capped", "fallback", "nodes_predicted",
-             "factors_updated"]
-    types = [str, float, float, int, int, int, int, bool, bool, int, int]
+             "factors_updated", "path", "auto_chosen", "cost_adaptive", "cost_exact"]
+    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -612,7 +614,9 @@ def test_stats_struct_size_is_honoured():
             partial = _lib.aqs_solve_stats(size=size, metric=-7, eps=-7.0, error_bound=-7.0,
                                            computed_joints=-7, counted_joints=-7,
                                            nodes_updated=-7, nodes_processed=-7, capped=-7,
-                                           fallback=-7, nodes_predicted=-7, factors_updated=-7)
+                                           fallback=-7, nodes_predicted=-7, factors_updated=-7,
+                                           path=-7, auto_chosen=-7, cost_adaptive=-7.0,
+                                           cost_exact=-7.0)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:
