@@ -91,6 +91,7 @@ typedef struct bench_run {
     int32_t steps;
     double median_s, mean_s, exact_median_s, dca_median_s;
     double mean_ne, mean_nu, mean_np, mean_npred, mean_nf, max_bound;
+    double mean_cost_ad, mean_cost_ex; /* the automatic path's predicted costs, per step */
     int32_t max_ne, fallback_steps, auto_exact_steps;
     double disp_err, max_disp;
 } bench_run;
@@ -688,6 +689,8 @@ static int timed_step(bench_state *b, aqs_linkage *L, double dt, double *t, benc
     sums->mean_np += st.nodes_processed;
     sums->mean_npred += st.nodes_predicted;
     sums->mean_nf += st.factors_updated;
+    sums->mean_cost_ad += st.cost_adaptive;
+    sums->mean_cost_ex += st.cost_exact;
     sums->max_ne = st.computed_joints > sums->max_ne ? st.computed_joints : sums->max_ne;
     sums->fallback_steps += st.fallback;
     sums->auto_exact_steps += st.auto_chosen && st.path != AQS_PATH_ADAPTIVE;
@@ -704,6 +707,8 @@ static void finish_sums(bench_run *r, int32_t n)
     r->mean_np /= n;
     r->mean_npred /= n;
     r->mean_nf /= n;
+    r->mean_cost_ad /= n;
+    r->mean_cost_ex /= n;
 }
 
 /* The exact reference run of nf forces: its displacements become the
@@ -835,14 +840,15 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
             "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
-            "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\",\"auto\":%s,\"auto_exact_steps\":%d}\n",
+            "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\",\"auto\":%s,\"auto_exact_steps\":%d,"
+            "\"auto_cost_adaptive\":%.6g,\"auto_cost_exact\":%.6g}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
             o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba,
             o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt", o->autopath ? "true" : "false",
-            (int)r->auto_exact_steps);
+            (int)r->auto_exact_steps, r->mean_cost_ad, r->mean_cost_ex);
     fflush(b->json);
 }
 

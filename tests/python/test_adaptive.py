@@ -818,3 +818,53 @@ def test_exact_solver_errors():
         assert L.exact_solver == "aba"
         L.set_exact_solver(aqs.EXACT_DCA)  # before finalize too
         assert L.exact_solver == "dca"
+
+
+@pytest.mark.parametrize("name", ["chain-300-tip-load", "tree-200-floating-local-load"])
+def test_auto(name):
+    """set_auto / auto (on by default): bad values raise and change nothing;
+    the first solve after the tolerance is set is adaptive, the next ones
+    are chosen by the cost model (SolveStats.path, auto_chosen, the two
+    predicted costs, the cheaper one taken); a step on the exact path
+    reports bound 0 and equals an exact linkage's solve at the same state
+    (both the articulated-body algorithm); off: adaptive throughout."""
+    case, _, _ = exact(name)
+    with build(aqs, case) as L, build(aqs, case) as X:
+        assert L.auto is True
+        for bad in (2, -1, 0.5, "yes"):
+            with pytest.raises((aqs.InvalidArgument, TypeError)):
+                L.set_auto(bad)
+        assert L.auto is True
+        L.set_tolerance("rel_joint", 2.0 ** -20)
+        first = L.solve()
+        assert first.path == "adaptive" and not first.auto_chosen
+        assert first.cost_adaptive == 0.0 == first.cost_exact
+        paths = set()
+        for _ in range(4):
+            X.set_positions(L.positions())  # the exact twin at the state the step starts from
+            X.solve()
+            stats = L.step(1e-4)
+            assert stats.auto_chosen
+            assert stats.cost_adaptive > 0.0 and stats.cost_exact > 0.0
+            if stats.path == "exact_aba":  # never when the adaptive path is predicted cheaper
+                assert stats.cost_adaptive >= stats.cost_exact
+            paths.add(stats.path)
+            if stats.path == "exact_aba":
+                assert stats.error_bound == 0.0 and not stats.fallback
+                assert stats.computed_joints == stats.counted_joints
+                # the same algorithm on the same state (set_positions renormalizes
+                # a quaternion: last bits)
+                assert rel_err(L.accelerations(), X.accelerations()) <= 1e-12
+            else:
+                assert stats.error_bound <= 2.0 ** -20
+        # a few hundred joints: the articulated-body step is cheaper than an
+        # adaptive one (each node costs ~10x an ABA joint), so the model goes exact
+        assert paths == {"exact_aba"}
+        L.set_auto(False)
+        assert L.auto is False
+        for _ in range(2):
+            stats = L.step(1e-4)
+            assert stats.path == "adaptive" and not stats.auto_chosen
+            assert stats.error_bound <= 2.0 ** -20
+        L.set_auto(1)
+        assert L.auto is True
