@@ -87,7 +87,12 @@ int autopath_prefers_exact(const aqs_linkage *L, int stepping)
     double ad, ex, st;
     if (!autopath_applies(L)) return 0;
     autopath_costs(L, stepping, &ad, &ex, &st);
-    return exact_by_costs(ad, ex, st, L->ap.regret);
+    /* Asked at the end of a step, before the update after its move: the
+     * stale nodes are the moved ones, which that update would recompute
+     * now. After it the next solve would see none stale (nothing else
+     * changes within the step) and take the exact path exactly when the
+     * adaptive cost without them is not below the exact one. */
+    return ad - st >= ex;
 }
 
 int autopath_decide(aqs_linkage *L, int stepping)

@@ -21,8 +21,10 @@ int autopath_applies(const aqs_linkage *L);
  * stale marks; changes nothing. */
 void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive, double *exact,
                     double *stale);
-/* Whether the next solve (stepping: step) would be exact, as
- * autopath_decide would decide it now; changes nothing. */
+/* At the end of a step, before the update after its move: whether the
+ * next step would be exact once that update is done (the stale nodes are
+ * then the moved ones, none after it); if so the update is skipped (an
+ * exact step does not need it). Changes nothing. */
 int autopath_prefers_exact(const aqs_linkage *L, int stepping);
 /* Decide the next solve's path (1: exact) and keep the regret of the
  * exact choices current. Call only when autopath_applies. */

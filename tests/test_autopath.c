@@ -112,13 +112,14 @@ static double adaptive_step_cost(const aqs_solve_stats *t, int32_t ne)
 
 static void test_choice_follows_counts(void **state)
 {
-    static const int forces[2] = {1, 400};
-    int c;
+    /* 1 force: far below the break-even; 2-8: around it; 400: far above */
+    static const int forces[] = {1, 2, 3, 5, 8, 400};
+    int c, near = 0, adaptive_kept = 0;
     (void)state;
-    for (c = 0; c < 2; c++) {
+    for (c = 0; c < (int)(sizeof forces / sizeof forces[0]); c++) {
         aqs_linkage *L = molecule(7), *T = molecule(7);
         const double eps = ldexp(1.0, -19);
-        int32_t ne, step, exact_steps = 0, agree = 0;
+        int32_t ne, step, exact_steps = 0, agree = 0, compared = 0;
         assert_int_equal(aqs_linkage_get_sizes(L, NULL, &ne, NULL, NULL), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(T, 0), AQS_OK);
         set_forces(L, forces[c], 11);
@@ -134,7 +135,7 @@ static void test_choice_follows_counts(void **state)
             assert_true(s.cost_adaptive == 0.0 && s.cost_exact == 0.0);
         }
         assert_int_equal(aqs_linkage_solve(T), AQS_OK);
-        for (step = 0; step < 6; step++) {
+        for (step = 0; step < 8; step++) {
             aqs_solve_stats s, t;
             double twin_cost, exact_cost = ne * (COST_ABA_JOINT + COST_ABA_MOVE);
             assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
@@ -153,22 +154,28 @@ static void test_choice_follows_counts(void **state)
                 assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
                 assert_true(s.error_bound <= eps);
                 assert_int_equal(s.computed_joints, t.computed_joints); /* the same steps so far */
+                assert_int_equal(s.nodes_updated, t.nodes_updated);
             }
-            /* the choice agrees with what the twin's adaptive step did (the
-             * first step of L after an adaptive solve: its tree is fresh) */
-            if ((twin_cost < exact_cost) == (s.path == AQS_PATH_ADAPTIVE)) agree++;
+            /* the choice agrees with what the twin's adaptive step really did
+             * (L's tree is as fresh as the twin's until L's first exact
+             * step); within 5 % of the break-even either is right */
+            if (fabs(twin_cost - exact_cost) > 0.05 * exact_cost) {
+                compared++;
+                if ((twin_cost < exact_cost) == (s.path == AQS_PATH_ADAPTIVE)) agree++;
+            } else {
+                near++;
+            }
             if (s.path == AQS_PATH_EXACT_ABA) break; /* the twin's positions differ from here */
         }
-        if (c == 0) {
-            assert_int_equal(exact_steps, 0); /* one force: adaptive throughout */
-            assert_int_equal(agree, 6);
-        } else {
-            assert_int_equal(exact_steps, 1); /* 400 forces: exact from the first step */
-            assert_int_equal(agree, 1);
-        }
+        assert_int_equal(agree, compared);
+        if (exact_steps == 0) adaptive_kept++; /* the adaptive path, kept while it is cheaper */
+        if (c == 0) assert_int_equal(exact_steps, 0);             /* one force: adaptive throughout */
+        if (forces[c] == 400) assert_true(exact_steps == 1 && step == 0); /* exact from the first step */
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(T);
     }
+    assert_true(adaptive_kept >= 2);
+    (void)near;
 }
 
 /* max over joints of the difference against the exact accelerations, and
