@@ -734,6 +734,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     before_f = L->t.factors_updated;
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
+    if (L->exact_by_aba) autopath_tree_moved(L, 1); /* the switch back pays for it */
     st = check_moved_positions(L, fn);
     /* After an exact solve by the articulated-body algorithm the tree's
      * coefficients are left stale (every node is marked): the next
@@ -987,6 +988,7 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
     if (joint < 0) {
         update_all_poses(L);
         stale_positions(L, -1);
+        autopath_tree_moved(L, 0); /* the caller's: an adaptive solve pays it too */
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
         update_poses_from_joint(L, e);

@@ -14,6 +14,9 @@
  *
  * Decision: adaptive when its cost without the stale part is below the
  * exact cost, and the stale part is paid for: adaptive <= exact + regret,
+ * (the stale part counting as a switch cost only when exact steps made it:
+ * nodes the caller made stale, e.g. by set_positions, an adaptive solve
+ * recomputes as well),
  * where regret sums what adaptive steps would have saved over the exact
  * solves chosen since the last adaptive one (a rent-or-buy rule: a switch
  * back to the adaptive solver after exact steps costs at most what staying
@@ -40,7 +43,10 @@ void autopath_reset(aqs_linkage *L)
     a->known = 0;
     a->proc = a->pred = a->regret = 0.0;
     a->since = 0;
+    a->own_stale = 0;
 }
+
+void autopath_tree_moved(aqs_linkage *L, int own) { L->ap.own_stale = own; }
 
 int autopath_applies(const aqs_linkage *L)
 {
@@ -101,6 +107,10 @@ int autopath_decide(aqs_linkage *L, int stepping)
     double ad, ex, st;
     int exact;
     autopath_costs(L, stepping, &ad, &ex, &st);
+    /* Stale nodes the caller made stale (set_positions, loads) would be
+     * recomputed by an adaptive solve as well: a cost of this solve, not of
+     * switching. Only the tree left stale by exact steps is the switch. */
+    if (!a->own_stale) st = 0.0;
     exact = exact_by_costs(ad, ex, st, a->regret);
     if (exact && ex > ad - st) a->regret += ex - (ad - st);
     a->cost_adaptive = ad;
@@ -223,6 +233,7 @@ void autopath_after_solve(aqs_linkage *L, int32_t path, int chose)
         a->regret = 0.0;
         a->since = 0;
         a->known = 1;
+        a->own_stale = 0; /* the update before it left the tree current */
     } else if (a->since++ % AUTOPATH_ESTIMATE_EVERY == 0 || !a->known) {
         estimate_from_exact(L);
         a->known = 1;

@@ -29,6 +29,10 @@ int autopath_prefers_exact(const aqs_linkage *L, int stepping);
 /* Decide the next solve's path (1: exact) and keep the regret of the
  * exact choices current. Call only when autopath_applies. */
 int autopath_decide(aqs_linkage *L, int stepping);
+/* Who made the whole tree stale: an exact step's move (own = 1: the cost
+ * of switching back, paid once) or the caller, e.g. set_positions (own = 0:
+ * an adaptive solve would pay it too, so it is no reason to stay exact). */
+void autopath_tree_moved(aqs_linkage *L, int own);
 /* After a successful solve: learn its counts (an adaptive solve's, or, for
  * an exact one while a tolerance is set, an estimate from its
  * accelerations) and record its path (AQS_PATH_*) and whether the model

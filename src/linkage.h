@@ -171,6 +171,8 @@ typedef struct {
     double regret;     /* what adaptive steps would have saved over the exact solves the
                           model chose since the last adaptive one (instructions) */
     int32_t since;     /* exact solves since the last estimate from accelerations */
+    int own_stale;     /* the whole tree is stale because of an exact step's move (the
+                          switch cost), not because of the caller (set_positions) */
     int32_t path;      /* AQS_PATH_* of the last solve */
     int chose;         /* the model chose the last solve's path */
     double cost_adaptive, cost_exact; /* the model's costs for the last solve (0: not asked) */

@@ -14,7 +14,12 @@
  *       an exact solve at the same positions (the exact steps to rounding,
  *       bound 0, every joint computed);
  *   (e) off: every solve adaptive, as before; on again: adaptive first;
- *   (f) the exact fallback, when set, takes precedence (stats.fallback). */
+ *   (f) the exact fallback, when set, takes precedence (stats.fallback);
+ *   (g) positions set by the caller before every solve make the whole tree
+ *       stale each time: an adaptive solve would recompute it every time, so
+ *       the model stays exact (it never pays that update to switch back),
+ *       while after exact steps (the tree stale by their own moves) it does
+ *       switch back. */
 #include "testutil.h"
 
 #include <math.h>
@@ -352,6 +357,39 @@ static void test_fallback_first(void **state)
     aqs_linkage_destroy(L);
 }
 
+static void test_caller_staleness_is_no_switch(void **state)
+{
+    aqs_linkage *L = molecule(3);
+    int32_t nq, k, exact = 0, back = 0;
+    double *q;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, NULL), AQS_OK);
+    q = malloc(sizeof(double) * (size_t)nq);
+    set_forces(L, 1, 5);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -10)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* adaptive, learns */
+    assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
+    for (k = 0; k < 60; k++) {
+        aqs_solve_stats s;
+        q[k % nq] += 1e-3; /* a new configuration, set in bulk */
+        assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.auto_chosen, 1);
+        exact += s.path == AQS_PATH_EXACT_ABA;
+    }
+    assert_int_equal(exact, 60); /* never the full update */
+    /* steps: the exact step's own staleness is a switch cost, repaid by the
+     * cheaper adaptive steps after enough exact ones */
+    for (k = 0; k < 60 && !back; k++) {
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        back = stats_of(L).path == AQS_PATH_ADAPTIVE;
+    }
+    assert_true(back);
+    free(q);
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -360,6 +398,7 @@ int main(void)
         cmocka_unit_test(test_mixed_trajectory),
         cmocka_unit_test(test_off_and_on),
         cmocka_unit_test(test_fallback_first),
+        cmocka_unit_test(test_caller_staleness_is_no_switch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
