@@ -88,7 +88,7 @@ static void inj_free(void *user, void *ptr)
 
 typedef struct {
     int32_t st[24];
-    int32_t sizes[4], tree[3], solver, shapes, cstats[4], layout[MAXB][4];
+    int32_t sizes[4], tree[3], solver, shapes, cstats[4], layout[MAXB][4], autopath;
     double mean_handles, fallback, prediction;
     double q[MAXQ], qdd[MAXQ], f[6 * MAXB], poses[7 * MAXB];
     aqs_solve_stats stats;
@@ -114,6 +114,7 @@ static void observe(aqs_linkage *L, observation *o)
     o->st[k++] = aqs_linkage_get_exact_solver(L, &o->solver);
     o->st[k++] = aqs_linkage_get_exact_fallback(L, &o->fallback);
     o->st[k++] = aqs_linkage_get_prediction(L, &o->prediction);
+    o->st[k++] = aqs_linkage_get_auto(L, &o->autopath);
     o->st[k++] = aqs_linkage_get_shape_count(L, &o->shapes);
     o->st[k++] = aqs_linkage_get_collision_stats(L, &o->cstats[0], &o->cstats[1], &o->cstats[2], &o->cstats[3]);
     o->st[k++] = aqs_linkage_get_positions(L, o->q, MAXQ);
