@@ -63,6 +63,7 @@ typedef struct bench_options {
     double fallback; /* aqs_linkage_set_exact_fallback on the adaptive linkage (0: off) */
     double prediction; /* aqs_linkage_set_prediction on the adaptive linkage (0: off) */
     int32_t dca_form;  /* aqs_linkage_set_dca_form on both linkages */
+    int32_t autopath;  /* aqs_linkage_set_auto on the adaptive linkage (default 0: off) */
     const char *out, *tip_path, *export_urdf;
     int append, quiet;
 } bench_options;
@@ -90,7 +91,8 @@ typedef struct bench_run {
     int32_t steps;
     double median_s, mean_s, exact_median_s, dca_median_s;
     double mean_ne, mean_nu, mean_np, mean_npred, mean_nf, max_bound;
-    int32_t max_ne, fallback_steps;
+    double mean_cost_ad, mean_cost_ex; /* the automatic path's predicted costs, per step */
+    int32_t max_ne, fallback_steps, auto_exact_steps;
     double disp_err, max_disp;
 } bench_run;
 
@@ -134,6 +136,9 @@ static void usage(FILE *f)
             "  --fallback F       aqs_linkage_set_exact_fallback(F) on the adaptive linkage:\n"
             "                     exact steps after one that computed more than F of the\n"
             "                     joints (default 0: off)\n"
+            "  --auto on|off      aqs_linkage_set_auto on the adaptive linkage: each step\n"
+            "                     takes the cheaper of the adaptive and the exact path\n"
+            "                     (default off: the adaptive solver alone)\n"
             "  --exact-every C    one timed exact step after every C adaptive steps\n"
             "                     (default 10; at least 3 per run)\n"
             "  --out PATH         JSON Lines, one object per configuration (overwritten)\n"
@@ -281,7 +286,7 @@ static int parse_list(const char *opt, const char *s, bench_options *o,
 }
 
 enum { OPT_SCENE, OPT_JOINTS, OPT_FORCES, OPT_METRIC, OPT_EPS, OPT_STEPS, OPT_REPEATS,
-       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_PREDICTION, OPT_DCA_FORM, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
+       OPT_SEED, OPT_FIRST_MOVE, OPT_FALLBACK, OPT_PREDICTION, OPT_DCA_FORM, OPT_AUTO, OPT_EXACT_EVERY, OPT_OUT, OPT_APPEND, OPT_TIP_PATH,
        OPT_TIP_EVERY, OPT_QUIET, OPT_EXPORT_URDF, OPT_HELP };
 
 static const struct {
@@ -294,7 +299,7 @@ static const struct {
     {"--repeats", OPT_REPEATS, 1},   {"--seed", OPT_SEED, 1},
     {"--first-move", OPT_FIRST_MOVE, 1}, {"--exact-every", OPT_EXACT_EVERY, 1},
     {"--fallback", OPT_FALLBACK, 1}, {"--prediction", OPT_PREDICTION, 1},
-    {"--dca-form", OPT_DCA_FORM, 1},
+    {"--dca-form", OPT_DCA_FORM, 1}, {"--auto", OPT_AUTO, 1},
     {"--out", OPT_OUT, 1},           {"--append", OPT_APPEND, 0},
     {"--tip-path", OPT_TIP_PATH, 1}, {"--tip-every", OPT_TIP_EVERY, 1},
     {"--quiet", OPT_QUIET, 0},       {"--help", OPT_HELP, 0},
@@ -407,6 +412,14 @@ static int parse_options(int argc, char **argv, bench_options *o)
             else if (strcmp(val, "phi") == 0) o->dca_form = AQS_DCA_FORM_PHI;
             else {
                 fprintf(stderr, "aqs-bench: --dca-form: '%s' is not sqrt or phi\n", val);
+                return 1;
+            }
+            break;
+        case OPT_AUTO:
+            if (strcmp(val, "on") == 0) o->autopath = 1;
+            else if (strcmp(val, "off") == 0) o->autopath = 0;
+            else {
+                fprintf(stderr, "aqs-bench: --auto: '%s' is not on or off\n", val);
                 return 1;
             }
             break;
@@ -676,8 +689,11 @@ static int timed_step(bench_state *b, aqs_linkage *L, double dt, double *t, benc
     sums->mean_np += st.nodes_processed;
     sums->mean_npred += st.nodes_predicted;
     sums->mean_nf += st.factors_updated;
+    sums->mean_cost_ad += st.cost_adaptive;
+    sums->mean_cost_ex += st.cost_exact;
     sums->max_ne = st.computed_joints > sums->max_ne ? st.computed_joints : sums->max_ne;
     sums->fallback_steps += st.fallback;
+    sums->auto_exact_steps += st.auto_chosen && st.path != AQS_PATH_ADAPTIVE;
     sums->max_bound = st.error_bound > sums->max_bound ? st.error_bound : sums->max_bound;
     return 0;
 }
@@ -691,6 +707,8 @@ static void finish_sums(bench_run *r, int32_t n)
     r->mean_np /= n;
     r->mean_npred /= n;
     r->mean_nf /= n;
+    r->mean_cost_ad /= n;
+    r->mean_cost_ex /= n;
 }
 
 /* The exact reference run of nf forces: its displacements become the
@@ -734,6 +752,7 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
                "aqs_linkage_set_exact_fallback") ||
         failed(aqs_linkage_set_prediction(b->adapt, b->opt->prediction), b->adapt,
                "aqs_linkage_set_prediction") ||
+        failed(aqs_linkage_set_auto(b->adapt, b->opt->autopath), b->adapt, "aqs_linkage_set_auto") ||
         reset(b, b->adapt, nf) != 0 || reset(b, b->exact, nf) != 0 ||
         (record && record_tip(b, b->adapt, "adaptive", nf, eps, 0) != 0)) {
         return 1;
@@ -821,13 +840,15 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
             "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
-            "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\"}\n",
+            "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\",\"auto\":%s,\"auto_exact_steps\":%d,"
+            "\"auto_cost_adaptive\":%.6g,\"auto_cost_exact\":%.6g}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
             o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba,
-            o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt");
+            o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt", o->autopath ? "true" : "false",
+            (int)r->auto_exact_steps, r->mean_cost_ad, r->mean_cost_ex);
     fflush(b->json);
 }
 

@@ -531,6 +531,30 @@ AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *linkage, double margi
  *  AQS_EINVAL (NULL), AQS_ESTATE. */
 AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *linkage, double *margin);
 
+/** Automatic path (on by default): with a tolerance (eps > 0, no cap),
+ *  each solve or step runs the cheaper of the adaptive solver and the
+ *  exact articulated-body solve, as a cost model counted in instructions
+ *  predicts it from the last solves' counts (nodes processed, predicted and
+ *  stale; estimated from the accelerations after an exact solve). After
+ *  exact solves every node of the assembly tree is stale, and a return to
+ *  the adaptive solver recomputes them all: it happens once the exact
+ *  solves have lost as much as that costs. The first solve after a
+ *  tolerance, cap, prediction margin or this mode is set is adaptive.
+ *  Exact solves report error_bound 0 and every joint computed;
+ *  aqs_solve_stats.path says which path ran, auto_chosen whether this model
+ *  chose it, cost_adaptive / cost_exact its predicted costs. The choice
+ *  depends on counts only: reproducible. The exact fallback, when set,
+ *  takes precedence. enabled: 1 (on) or 0 (off: always the adaptive
+ *  solver, as before). Any phase. Returns AQS_OK, AQS_EINVAL (enabled not
+ *  0 or 1; nothing changed). */
+#define AQS_PATH_ADAPTIVE 0  /**< the adaptive solver (a tolerance or a cap) */
+#define AQS_PATH_EXACT_ABA 1 /**< exact, the articulated-body algorithm */
+#define AQS_PATH_EXACT_DCA 2 /**< exact, the full DCA back-substitution (AQS_EXACT_DCA, eps = 0) */
+AQS_API aqs_status aqs_linkage_set_auto(aqs_linkage *linkage, int32_t enabled);
+/** Whether the automatic path is on (1) or off (0) into *enabled. Returns
+ *  AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_auto(const aqs_linkage *linkage, int32_t *enabled);
+
 /** Refine the last solve down to a smaller eps (same measure) by continuing
  *  its priority queue instead of starting over. Valid only right after a
  *  solve or refine, before anything changes positions or loads; otherwise
@@ -555,6 +579,10 @@ typedef struct aqs_solve_stats {
     int32_t fallback;        /**< 1 if the last solve was exact because of aqs_linkage_set_exact_fallback */
     int32_t nodes_predicted; /**< internal nodes the last solve processed without evaluating their total acceleration (aqs_linkage_set_prediction) */
     int32_t factors_updated; /**< total-acceleration factors recomputed, counted as nodes_updated */
+    int32_t path;            /**< AQS_PATH_*: the path the last solve ran */
+    int32_t auto_chosen;     /**< 1 if the automatic path (aqs_linkage_set_auto) chose it */
+    double cost_adaptive;    /**< the automatic path's predicted cost of the adaptive path, instructions (0 when it did not choose) */
+    double cost_exact;       /**< the same for the exact path */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

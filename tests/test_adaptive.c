@@ -735,6 +735,7 @@ static void test_lazy_equals_eager(void **state)
     unsigned char *stale;
     int32_t n;
     (void)state;
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's own state */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -6)), AQS_OK);
     for (step = 0; step < 1000; step++) {
         /* 2^-6 computes a part of the joints; 2^-12 most or all of them */
@@ -914,6 +915,7 @@ static void test_exact_fallback(void **state)
     (void)state;
     assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
     assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_ABA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the fallback alone (test_auto_*) */
     assert_int_equal(aqs_linkage_get_exact_fallback(L, &fr), AQS_OK);
     assert_true(fr == 0.0); /* off by default */
     assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.5), AQS_OK);
@@ -1044,6 +1046,8 @@ static void test_prediction(void **state)
         assert_int_equal(aqs_linkage_get_prediction(L, &m), AQS_OK);
         assert_true(m == AQS_PREDICTION_MARGIN);
         assert_int_equal(aqs_linkage_set_prediction(O, 0.0), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive steps only */
+        assert_int_equal(aqs_linkage_set_auto(O, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
         assert_int_equal(aqs_linkage_set_tolerance(O, metric, eps), AQS_OK);
         nv = L->nv;
@@ -1150,6 +1154,7 @@ static void test_prediction_refine(void **state)
         rng = r0;
         X = random_linkage(&rng, &sp);
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive solves and refines */
         nv = L->nv;
         exact = malloc(sizeof(double) * (size_t)(nv + 1));
         approx = malloc(sizeof(double) * (size_t)(nv + 1));
@@ -1218,7 +1223,8 @@ static void test_prediction_settings(void **state)
     assert_int_equal(aqs_linkage_set_prediction(U, 2.0), AQS_ESTATE);
     assert_int_equal(aqs_linkage_get_prediction(U, &m), AQS_ESTATE);
     aqs_linkage_destroy(U);
-    /* on: predicted nodes after the first step */
+    /* on: predicted nodes after the first step (of the adaptive solver) */
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -20)), AQS_OK);
     (void)solve_stats(L, 1);
     assert_true(solve_stats(L, 1).nodes_predicted > 0);

@@ -469,6 +469,10 @@ static void lazy_persistent(int32_t n, uint64_t seed, int joined, int steps, int
     size_t nprev = 0;
     int prev_queried = 0, with_contacts = 0, changes = 0, local = 0, adaptive_checked = 0, replays = 0;
     long skipped = 0;
+    /* adaptive steps as such (step_dt solves L1 once more than L2, which
+     * would feed the automatic path different histories) */
+    assert_int_equal(aqs_linkage_set_auto(L1, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L2, 0), AQS_OK);
     assert_int_equal(aqs_linkage_get_sizes(L1, NULL, NULL, &nq, NULL), AQS_OK);
     q1 = calloc((size_t)nq + 1, sizeof(double));
     q2 = calloc((size_t)nq + 1, sizeof(double));
@@ -725,6 +729,10 @@ static void certificates_small_steps(int32_t n, uint64_t seed, double h, int ste
     aqs_contact *lazy = calloc(LAZY_CAP, sizeof(aqs_contact)), *other = calloc(LAZY_CAP, sizeof(aqs_contact));
     long vt_lazy = 0, vt_full = 0, reused = 0, made_later = 0, near = 0, contacts = 0;
     int32_t step, vt;
+    /* adaptive steps as such (step_dt solves L1 once more than L2, which
+     * would feed the automatic path different histories) */
+    assert_int_equal(aqs_linkage_set_auto(L1, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L2, 0), AQS_OK);
     for (step = 0; step <= steps; step++) {
         size_t nl, nf, nb;
         if (step > 0) {

@@ -9,6 +9,7 @@
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
+#include "autopath.h"
 #include "check.h"
 #include "collide.h"
 #include "dca.h"
@@ -124,6 +125,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->free_fn = free_fn;
     L->user = user;
     L->t.root = -1;
+    autopath_init(L);
     *out = L;
     return AQS_OK;
 }
@@ -629,20 +631,29 @@ static int fallback_applies(const aqs_linkage *L)
     return L->fallback > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
 }
 
-static aqs_status solve(aqs_linkage *L, const char *fn)
+static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
 {
     aqs_status st;
-    int fb = fallback_applies(L) && L->fb_left > 0;
+    int fb = fallback_applies(L) && L->fb_left > 0, chose = 0, auto_exact = 0, by_aba;
+    int32_t path;
     L->exact_by_aba = 0;
     L->fb_last = 0;
+    if (!fb && autopath_applies(L)) {
+        /* the stale marks of the loads first: the model counts them */
+        update_loads(L);
+        chose = 1;
+        auto_exact = autopath_decide(L, stepping);
+    }
+    by_aba = exact_by_aba(L) || fb || auto_exact;
     /* the predicted set is for an adaptive solve by the heap only */
-    if (exact_by_aba(L) || fb || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
-    if (exact_by_aba(L) || fb) {
+    if (by_aba || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
+    if (by_aba) {
         if ((st = aba_solve(L)) != AQS_OK) {
             stale_solve_failed(L);
             return st;
         }
         L->exact_by_aba = 1;
+        path = AQS_PATH_EXACT_ABA;
     } else {
         /* allocated already by finalize or by the setters that lead here */
         if ((st = dca_enable(L, fn)) != AQS_OK) return st;
@@ -651,13 +662,17 @@ static aqs_status solve(aqs_linkage *L, const char *fn)
             return st;
         }
         adaptive_solve(L);
+        path = L->s.eps == 0.0 && L->s.max_computed == 0 ? AQS_PATH_EXACT_DCA : AQS_PATH_ADAPTIVE;
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         stale_solve_failed(L);
         return st;
     }
     stale_solve_done(L);
-    if (fb) {
+    autopath_after_solve(L, path, chose);
+    if (auto_exact) {
+        /* the model's exact solve is not a fallback step */
+    } else if (fb) {
         L->fb_left--;
         L->fb_last = 1;
     } else if (fallback_applies(L) && !L->s.all && (double)L->s.computed > L->fallback * (double)L->s.counted) {
@@ -672,7 +687,7 @@ AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
     aqs_status st;
     CHECK_LINKAGE(L);
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
-    return solve(L, fn);
+    return solve(L, fn, 0);
 }
 
 /* Save (or restore) the positions a step moves: all of them after an exact
@@ -715,17 +730,22 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     if (!isfinite(dt) || !(dt > 0.0))
         return lk_fail(L, AQS_EINVAL, "%s: dt = %g must be finite and > 0", fn, dt);
-    if ((st = solve(L, fn)) != AQS_OK) return st;
+    if ((st = solve(L, fn, 1)) != AQS_OK) return st;
     before = L->t.nodes_updated; /* what the solve's update recomputed (loads changed since) */
     before_f = L->t.factors_updated;
     copy_moved_positions(L, L->q_saved, L->q);
     adaptive_integrate(L, dt * dt);
+    if (L->exact_by_aba) autopath_tree_moved(L, 1); /* the switch back pays for it */
     st = check_moved_positions(L, fn);
     /* After an exact solve by the articulated-body algorithm the tree's
      * coefficients are left stale (every node is marked): the next
      * articulated-body solve does not need them, an adaptive one recomputes
      * them first. */
-    if (st == AQS_OK && !L->exact_by_aba) st = update_coefficients(L);
+    /* So is the update after an adaptive step's move when the automatic
+     * path will take the exact one next: the nodes stay marked, and an
+     * adaptive solve recomputes them first (the model counts them). */
+    if (st == AQS_OK && !L->exact_by_aba && !autopath_prefers_exact(L, 1)) st = update_coefficients(L);
+    else if (st == AQS_OK) L->t.nodes_updated = L->t.factors_updated = 0;
     if (st == AQS_OK) {
         L->t.nodes_updated += before;
         L->t.factors_updated += before_f;
@@ -761,6 +781,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     L->s.eps = eps;
     stale_settings(L);
     L->fb_left = 0;
+    autopath_reset(L);
     adaptive_predict_clear(L); /* made for the former measure */
     return AQS_OK;
 }
@@ -779,6 +800,7 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
     }
     L->s.max_computed = max_joints;
     L->fb_left = 0;
+    autopath_reset(L);
     return AQS_OK;
 }
 
@@ -814,6 +836,7 @@ AQS_API aqs_status aqs_linkage_set_prediction(aqs_linkage *L, double margin)
                        margin);
     L->s.margin = margin;
     adaptive_predict_clear(L);
+    autopath_reset(L);
     return AQS_OK;
 }
 
@@ -826,6 +849,27 @@ AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *cL, double *mar
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, margin);
     *margin = L->s.margin;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_auto(aqs_linkage *L, int32_t enabled)
+{
+    static const char fn[] = "aqs_linkage_set_auto";
+    CHECK_LINKAGE(L);
+    if (enabled != 0 && enabled != 1)
+        return lk_fail(L, AQS_EINVAL, "%s: enabled = %d must be 0 or 1", fn, (int)enabled);
+    L->ap.on = enabled;
+    autopath_reset(L);
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_auto(const aqs_linkage *cL, int32_t *enabled)
+{
+    static const char fn[] = "aqs_linkage_get_auto";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, enabled);
+    *enabled = L->ap.on;
     return AQS_OK;
 }
 
@@ -886,6 +930,10 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.fallback = L->fb_last;
     full.nodes_predicted = L->s.all ? 0 : L->s.npredicted;
     full.factors_updated = L->t.factors_updated;
+    full.path = L->ap.path;
+    full.auto_chosen = L->ap.chose;
+    full.cost_adaptive = L->ap.cost_adaptive;
+    full.cost_exact = L->ap.cost_exact;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }
@@ -941,6 +989,7 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
     if (joint < 0) {
         frames_all(L);
         stale_positions(L, -1);
+        autopath_tree_moved(L, 0); /* the caller's: an adaptive solve pays it too */
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
         frames_from_joint(L, e);

@@ -161,6 +161,23 @@ typedef struct {
     double *x;      /* 6 x max handles: a welded composite's leaf handle forces */
 } aba_state;
 
+/* The automatic choice between the adaptive and the exact path (src/solve/autopath.c). */
+typedef struct {
+    int on;            /* aqs_linkage_set_auto (default 1) */
+    int known;         /* proc and pred describe a solve since the model was reset */
+    double proc;       /* internal nodes an adaptive solve processes: the last adaptive
+                          solve's count, or the estimate from the last exact solve */
+    double pred;       /* of which predicted (their factors skipped after a move) */
+    double regret;     /* what adaptive steps would have saved over the exact solves the
+                          model chose since the last adaptive one (instructions) */
+    int32_t since;     /* exact solves since the last estimate from accelerations */
+    int own_stale;     /* the whole tree is stale because of an exact step's move (the
+                          switch cost), not because of the caller (set_positions) */
+    int32_t path;      /* AQS_PATH_* of the last solve */
+    int chose;         /* the model chose the last solve's path */
+    double cost_adaptive, cost_exact; /* the model's costs for the last solve (0: not asked) */
+} autopath_state;
+
 struct aqs_linkage {
     aqs_alloc_fn alloc;
     aqs_free_fn free_fn;
@@ -207,6 +224,7 @@ struct aqs_linkage {
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;
     char *load_warnings;  /* what the last URDF load did not model (src/api/urdf.c); NULL = none */
+    autopath_state ap;    /* the automatic path (src/solve/autopath.c) */
 };
 
 /* The name of a body / joint, or NULL (set by src/api/names.c; model.c's messages read

@@ -28,6 +28,8 @@ REQUIRED = {
     "prediction": (int, float), "nodes_predicted": (int, float), "factors_updated": (int, float),
     "dca_form": str,
     "ratio_R_aba": float,
+    "auto": bool, "auto_exact_steps": int, "auto_cost_adaptive": (int, float),
+    "auto_cost_exact": (int, float),
 }
 
 
@@ -126,6 +128,7 @@ def test_displacement_error_recomputed(tmp_path):
 
     def com_positions(eps):
         with aqs.load_urdf(str(urdf)) as L:
+            L.set_auto(False)  # the adaptive solver, as aqs-bench measures it by default
             L.set_body_force(29, (0, 1, 0), point=(1, 0, 0))
             L.set_tolerance("rel_joint", eps)
             start = None
@@ -211,6 +214,7 @@ def test_tip_path(tmp_path):
     (["--fallback", "1.5"], "--fallback"),
     (["--prediction", "0.5"], "--prediction"),
     (["--dca-form", "cholesky"], "--dca-form"),
+    (["--auto", "maybe"], "--auto"),
 ])
 def test_bad_input(args, message):
     res = run("--joints", "200", "--quiet", *args, check=False)
@@ -230,6 +234,24 @@ def test_dca_form(tmp_path):
     sq, ph = [json.loads(x) for x in out.read_text().splitlines()]
     assert sq["dca_form"] == "sqrt" and ph["dca_form"] == "phi"
     assert abs(sq["computed_joints"] - ph["computed_joints"]) <= 0.02 * max(1.0, ph["computed_joints"])
+
+
+def test_auto(tmp_path):
+    """--auto on: with 100 forces on a 2,000-joint molecule the exact step is
+    cheaper and every step after the first solve is exact (auto_exact_steps,
+    its predicted costs in the JSON, bound 0); --auto off (the default): the
+    adaptive solver alone, as before."""
+    out = tmp_path / "auto.jsonl"
+    args = ("--joints", "2000", "--steps", "6", "--forces", "100", "--quiet", "--eps", "2^-19")
+    run(*args, "--auto", "on", "--out", str(out))
+    run(*args, "--append", "--out", str(out))
+    on, off = [json.loads(x) for x in out.read_text().splitlines()]
+    assert on["auto"] is True and off["auto"] is False
+    assert on["auto_exact_steps"] == 6 and off["auto_exact_steps"] == 0
+    assert on["auto_cost_adaptive"] > on["auto_cost_exact"] > 0
+    assert off["auto_cost_adaptive"] == 0 == off["auto_cost_exact"]
+    assert on["max_error_bound"] == 0 and on["computed_joints"] == on["joints"]
+    assert off["max_error_bound"] <= 2.0 ** -19
 
 
 def test_export_urdf(tmp_path):

@@ -88,7 +88,7 @@ static void inj_free(void *user, void *ptr)
 
 typedef struct {
     int32_t st[24];
-    int32_t sizes[4], tree[3], solver, shapes, cstats[4], layout[MAXB][4];
+    int32_t sizes[4], tree[3], solver, shapes, cstats[4], layout[MAXB][4], autopath;
     double mean_handles, fallback, prediction;
     double q[MAXQ], qdd[MAXQ], f[6 * MAXB], poses[7 * MAXB];
     aqs_solve_stats stats;
@@ -114,6 +114,7 @@ static void observe(aqs_linkage *L, observation *o)
     o->st[k++] = aqs_linkage_get_exact_solver(L, &o->solver);
     o->st[k++] = aqs_linkage_get_exact_fallback(L, &o->fallback);
     o->st[k++] = aqs_linkage_get_prediction(L, &o->prediction);
+    o->st[k++] = aqs_linkage_get_auto(L, &o->autopath);
     o->st[k++] = aqs_linkage_get_shape_count(L, &o->shapes);
     o->st[k++] = aqs_linkage_get_collision_stats(L, &o->cstats[0], &o->cstats[1], &o->cstats[2], &o->cstats[3]);
     o->st[k++] = aqs_linkage_get_positions(L, o->q, MAXQ);
@@ -168,7 +169,7 @@ enum {
     OP_BODY, OP_JOINT, OP_FINALIZE, OP_SOLVER, OP_BUILDER, OP_INERTIA, OP_POSITIONS, OP_POSITION,
     OP_GRAVITY, OP_FORCE, OP_CLEAR_FORCE, OP_CLEAR_FORCES, OP_JOINT_FORCE, OP_TOLERANCE, OP_CAP,
     OP_FALLBACK, OP_PREDICTION, OP_BOUND, OP_SOLVE, OP_STEP, OP_REFINE, OP_SHAPE, OP_HULL,
-    OP_FILTER, OP_EXCLUDE, OP_JOINED, OP_COLLIDE, OP_ANY, OP_STIFFNESS, OP_COUNT
+    OP_FILTER, OP_EXCLUDE, OP_JOINED, OP_COLLIDE, OP_ANY, OP_STIFFNESS, OP_AUTO, OP_COUNT
 };
 
 static const char *const op_names[OP_COUNT] = {
@@ -177,7 +178,7 @@ static const char *const op_names[OP_COUNT] = {
     "body_clear_force", "clear_forces", "joint_set_force", "set_tolerance", "set_max_computed",
     "set_exact_fallback", "set_prediction", "set_joint_bound", "solve", "step", "refine",
     "shape_add", "shape_add_hull", "set_collision_filter", "exclude_pair", "set_collide_joined",
-    "collide", "any_contact", "set_contact_stiffness"};
+    "collide", "any_contact", "set_contact_stiffness", "set_auto"};
 
 static void decode(input *in, aqs_linkage *S, call *c)
 {
@@ -203,7 +204,7 @@ static void decode(input *in, aqs_linkage *S, call *c)
         c->qt = quat(in);
         c->ax = axis(in);
         break;
-    case OP_SOLVER: case OP_BUILDER: case OP_INERTIA: case OP_BOUND: case OP_JOINED:
+    case OP_SOLVER: case OP_BUILDER: case OP_INERTIA: case OP_BOUND: case OP_JOINED: case OP_AUTO:
         c->i0 = (int32_t)pick(in, 3);
         break;
     case OP_POSITIONS:
@@ -324,6 +325,7 @@ static aqs_status apply(aqs_linkage *L, const call *c)
         return aqs_linkage_any_contact(L, &hit);
     }
     case OP_STIFFNESS: return aqs_linkage_set_contact_stiffness(L, c->d0);
+    case OP_AUTO: return aqs_linkage_set_auto(L, c->i0);
     default: return AQS_OK;
     }
 }

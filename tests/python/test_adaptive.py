@@ -343,6 +343,7 @@ def test_prediction(name, metric):
             with pytest.raises(aqs.InvalidArgument, match="margin"):
                 L.set_prediction(bad)
         assert L.prediction == aqs.PREDICTION_MARGIN
+        L.set_auto(False)  # the adaptive solver's own prediction
         L.set_tolerance(metric, 2.0 ** -20)
         first = L.solve()
         assert first.nodes_predicted == 0
@@ -550,6 +551,7 @@ def test_adaptive_step_moves_only_computed_joints():
     case, _, _ = exact(name)
     with build(aqs, case) as L:
         layouts = [L.joint_layout(k) for k in range(len(case["joints"]))]
+        L.set_auto(False)  # an adaptive step as such (on 300 joints the exact one is cheaper)
         L.set_tolerance("rel_linkage", 2.0 ** -5)
         L.solve()  # builds every node's factors: the step's own solve updates nothing
         before = L.positions().copy()
@@ -577,8 +579,8 @@ def test_adaptive_step_moves_only_computed_joints():
 def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
              "nodes_updated", "nodes_processed", "capped", "fallback", "nodes_predicted",
-             "factors_updated"]
-    types = [str, float, float, int, int, int, int, bool, bool, int, int]
+             "factors_updated", "path", "auto_chosen", "cost_adaptive", "cost_exact"]
+    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -612,7 +614,9 @@ def test_stats_struct_size_is_honoured():
             partial = _lib.aqs_solve_stats(size=size, metric=-7, eps=-7.0, error_bound=-7.0,
                                            computed_joints=-7, counted_joints=-7,
                                            nodes_updated=-7, nodes_processed=-7, capped=-7,
-                                           fallback=-7, nodes_predicted=-7, factors_updated=-7)
+                                           fallback=-7, nodes_predicted=-7, factors_updated=-7,
+                                           path=-7, auto_chosen=-7, cost_adaptive=-7.0,
+                                           cost_exact=-7.0)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:
@@ -814,3 +818,53 @@ def test_exact_solver_errors():
         assert L.exact_solver == "aba"
         L.set_exact_solver(aqs.EXACT_DCA)  # before finalize too
         assert L.exact_solver == "dca"
+
+
+@pytest.mark.parametrize("name", ["chain-300-tip-load", "tree-200-floating-local-load"])
+def test_auto(name):
+    """set_auto / auto (on by default): bad values raise and change nothing;
+    the first solve after the tolerance is set is adaptive, the next ones
+    are chosen by the cost model (SolveStats.path, auto_chosen, the two
+    predicted costs, the cheaper one taken); a step on the exact path
+    reports bound 0 and equals an exact linkage's solve at the same state
+    (both the articulated-body algorithm); off: adaptive throughout."""
+    case, _, _ = exact(name)
+    with build(aqs, case) as L, build(aqs, case) as X:
+        assert L.auto is True
+        for bad in (2, -1, 0.5, "yes"):
+            with pytest.raises((aqs.InvalidArgument, TypeError)):
+                L.set_auto(bad)
+        assert L.auto is True
+        L.set_tolerance("rel_joint", 2.0 ** -20)
+        first = L.solve()
+        assert first.path == "adaptive" and not first.auto_chosen
+        assert first.cost_adaptive == 0.0 == first.cost_exact
+        paths = set()
+        for _ in range(4):
+            X.set_positions(L.positions())  # the exact twin at the state the step starts from
+            X.solve()
+            stats = L.step(1e-4)
+            assert stats.auto_chosen
+            assert stats.cost_adaptive > 0.0 and stats.cost_exact > 0.0
+            if stats.path == "exact_aba":  # never when the adaptive path is predicted cheaper
+                assert stats.cost_adaptive >= stats.cost_exact
+            paths.add(stats.path)
+            if stats.path == "exact_aba":
+                assert stats.error_bound == 0.0 and not stats.fallback
+                assert stats.computed_joints == stats.counted_joints
+                # the same algorithm on the same state (set_positions renormalizes
+                # a quaternion: last bits)
+                assert rel_err(L.accelerations(), X.accelerations()) <= 1e-12
+            else:
+                assert stats.error_bound <= 2.0 ** -20
+        # a few hundred joints: the articulated-body step is cheaper than an
+        # adaptive one (each node costs ~10x an ABA joint), so the model goes exact
+        assert paths == {"exact_aba"}
+        L.set_auto(False)
+        assert L.auto is False
+        for _ in range(2):
+            stats = L.step(1e-4)
+            assert stats.path == "adaptive" and not stats.auto_chosen
+            assert stats.error_bound <= 2.0 ** -20
+        L.set_auto(1)
+        assert L.auto is True

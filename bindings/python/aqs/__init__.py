@@ -77,6 +77,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
                    EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN,
+                   PATH_ADAPTIVE, PATH_EXACT_ABA, PATH_EXACT_DCA,
                    DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
@@ -95,6 +96,7 @@ __all__ = [
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
     "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN",
+    "PATH_ADAPTIVE", "PATH_EXACT_ABA", "PATH_EXACT_DCA",
     "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
@@ -168,6 +170,11 @@ class SolveStats:
         their total acceleration (set_prediction).
     factors_updated: total-acceleration factors recomputed, counted as
         nodes_updated (the prediction skips some).
+    path: the path the solve ran: "adaptive", "exact_aba" (articulated-body
+        algorithm) or "exact_dca" (aqs.PATH_*; see set_auto).
+    auto_chosen: True if the automatic path (set_auto) chose it.
+    cost_adaptive, cost_exact: the automatic path's predicted costs of the
+        two paths, in instructions (0.0 when it did not choose).
     """
 
     metric: str
@@ -181,6 +188,10 @@ class SolveStats:
     fallback: bool = False
     nodes_predicted: int = 0
     factors_updated: int = 0
+    path: str = "adaptive"
+    auto_chosen: bool = False
+    cost_adaptive: float = 0.0
+    cost_exact: float = 0.0
 
     @classmethod
     def _from_c(cls, c):
@@ -189,7 +200,9 @@ class SolveStats:
                    counted_joints=int(c.counted_joints), nodes_updated=int(c.nodes_updated),
                    nodes_processed=int(c.nodes_processed), capped=bool(c.capped),
                    fallback=bool(c.fallback), nodes_predicted=int(c.nodes_predicted),
-                   factors_updated=int(c.factors_updated))
+                   factors_updated=int(c.factors_updated),
+                   path=_lib.PATH_NAMES.get(c.path, str(c.path)), auto_chosen=bool(c.auto_chosen),
+                   cost_adaptive=float(c.cost_adaptive), cost_exact=float(c.cost_exact))
 
 
 def version():
@@ -881,6 +894,25 @@ class Linkage:
         value = ctypes.c_double()
         self._call("aqs_linkage_get_prediction", ctypes.byref(value))
         return value.value
+
+    def set_auto(self, enabled):
+        """Automatic path (aqs_linkage_set_auto), on by default: with a
+        tolerance, each solve or step runs the cheaper of the adaptive
+        solver and the exact articulated-body solve, as a cost model counted
+        in instructions predicts it from the last solves' counts
+        (SolveStats.path, auto_chosen, cost_adaptive, cost_exact). Exact
+        solves report error_bound 0. The first solve after a tolerance, cap,
+        prediction margin or this mode is set is adaptive. enabled: True/False
+        or 1/0; False always runs the adaptive solver. Any phase."""
+        f = "aqs_linkage_set_auto"
+        self._call(f, _flag(enabled, f, "enabled"))
+
+    @property
+    def auto(self):
+        """Whether the automatic path is on (set_auto)."""
+        value = ctypes.c_int32()
+        self._call("aqs_linkage_get_auto", ctypes.byref(value))
+        return bool(value.value)
 
     def set_joint_bound(self, kind):
         """Which certified bound the joint-wise measures ("abs_joint",

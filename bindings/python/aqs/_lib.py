@@ -97,6 +97,12 @@ FALLBACK_RUN = 15
 # Default margin of aqs_linkage_set_prediction (AQS_PREDICTION_MARGIN).
 PREDICTION_MARGIN = 1024.0
 
+# Which path a solve ran (aqs_solve_stats.path, AQS_PATH_*).
+PATH_ADAPTIVE = 0   # the adaptive solver (a tolerance or a cap)
+PATH_EXACT_ABA = 1  # exact, the articulated-body algorithm
+PATH_EXACT_DCA = 2  # exact, the full DCA back-substitution
+PATH_NAMES = {PATH_ADAPTIVE: "adaptive", PATH_EXACT_ABA: "exact_aba", PATH_EXACT_DCA: "exact_dca"}
+
 EXACT_SOLVERS = {
     "aba": EXACT_ABA,
     "dca": EXACT_DCA,
@@ -180,6 +186,10 @@ class aqs_solve_stats(ctypes.Structure):
         ("fallback", ctypes.c_int32),         # 1 if exact because of the exact fallback
         ("nodes_predicted", ctypes.c_int32),  # processed without evaluating A (prediction)
         ("factors_updated", ctypes.c_int32),  # total-acceleration factors recomputed
+        ("path", ctypes.c_int32),             # AQS_PATH_*: the path the solve ran
+        ("auto_chosen", ctypes.c_int32),      # 1 if the automatic path chose it
+        ("cost_adaptive", ctypes.c_double),   # its predicted cost of the adaptive path (instructions)
+        ("cost_exact", ctypes.c_double),      # and of the exact path
     ]
 
 
@@ -345,6 +355,8 @@ PROTOTYPES = {
     "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_prediction": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_prediction": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
+    "aqs_linkage_set_auto": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_get_auto": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_int32)]),
     "aqs_linkage_refine": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_stats": (status_t, [linkage_p, solve_stats_p]),
     "aqs_joint_get_computed": (status_t, [linkage_p, ctypes.c_int32, int32_p]),

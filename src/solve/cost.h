@@ -1,0 +1,34 @@
+/* cost.h -- per-node costs of the two solve paths, in instructions, for the
+ * automatic choice between them (src/solve/autopath.c, docs/api.md "Automatic
+ * path"). The one place these numbers live: when a kernel gets cheaper,
+ * re-run tools/calibrate_cost.py (callgrind on the 5,000-joint molecule; it
+ * prints these lines, each the inclusive instruction count per call of the
+ * kernel named below) and paste its output here.
+ *
+ * Counted, not timed: the choice then depends on counts only, so a run is
+ * reproducible (the same positions and loads take the same path on every
+ * machine and at any load). Calibrated 2026-12-02 by tools/calibrate_cost.py
+ * --joints 5000 --steps 12 (docs/bench.md, "The automatic path"), gcc 12,
+ * -O2 -funroll-loops. */
+#ifndef AQS_COST_H
+#define AQS_COST_H
+
+/* An internal node's DCA coefficients (dca_node_update), by DCA form
+ * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
+#define COST_DCA_NODE_SQRT 38560.0
+#define COST_DCA_NODE_PHI 9230.0
+/* An internal node's total-acceleration factor (totalacc_node_update). */
+#define COST_FACTOR 5370.0
+/* A node processed by the adaptive solve: dca_node_backsub, one
+ * totalacc_eval, one heap_push and heap_pop. */
+#define COST_PROCESS 1260.0
+/* A node moved by an adaptive step: joint_integrate, frames_node. */
+#define COST_MOVE 520.0
+/* The exact solve by the articulated-body algorithm (aba_solve), per
+ * effective joint. */
+#define COST_ABA_JOINT 2340.0
+/* An exact step's move, per effective joint: joint_integrate, and
+ * frames_all per joint. */
+#define COST_ABA_MOVE 540.0
+
+#endif

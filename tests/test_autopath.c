@@ -1,0 +1,404 @@
+/* test_autopath.c -- the automatic path (aqs_linkage_set_auto, src/solve/autopath.c):
+ *   (a) the setting: on by default, 0/1 only, bad values refused with a
+ *       message naming the argument, nothing changed; any phase;
+ *   (b) stats.path names the path that ran, auto_chosen whether the model
+ *       chose it; eps = 0 is never a choice;
+ *   (c) on a molecule-like tree of 4,000 joints the model picks the adaptive
+ *       path with one force and the exact one with 400, and each choice
+ *       agrees with the counts of a twin that always runs the adaptive
+ *       solver (its nodes updated, factors updated and nodes processed priced
+ *       with src/solve/cost.h against the articulated-body step): counts, no clock;
+ *   (d) a trajectory whose loads go from one force to 400 and back mixes
+ *       both paths (and returns to the adaptive one after exact steps, whose
+ *       tree is stale): every step's solve is within its certified bound of
+ *       an exact solve at the same positions (the exact steps to rounding,
+ *       bound 0, every joint computed);
+ *   (e) off: every solve adaptive, as before; on again: adaptive first;
+ *   (f) the exact fallback, when set, takes precedence (stats.fallback);
+ *   (g) positions set by the caller before every solve make the whole tree
+ *       stale each time: an adaptive solve would recompute it every time, so
+ *       the model stays exact (it never pays that update to switch back),
+ *       while after exact steps (the tree stale by their own moves) it does
+ *       switch back. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cost.h"
+
+#define NJ 4000
+
+/* A molecule-like tree: revolute torsions about the incoming bond, a
+ * backbone with side chains of 1-4 atoms on about half its atoms. */
+static aqs_linkage *molecule(uint64_t seed)
+{
+    aqs_linkage *L = test_new_linkage();
+    uint64_t rng = seed;
+    int32_t i, back = -1;
+    double q1[4] = {1, 0, 0, 0};
+    for (i = 0; i < NJ; i++) {
+        double m = test_uniform(&rng, 12, 33), com[3] = {0, 0, 0}, I[9] = {0};
+        I[0] = I[4] = I[8] = 0.1 * m;
+        assert_int_equal(aqs_body_add(L, m, com, I, NULL), AQS_OK);
+    }
+    for (i = 0; i < NJ;) {
+        /* one backbone atom, then maybe a side chain hanging from it */
+        int32_t parent = back, side = test_uniform(&rng, 0, 1) < 0.5 ? 1 + (int32_t)test_uniform(&rng, 0, 4) : 0, k;
+        double pos[3] = {test_uniform(&rng, -0.5, 0.5), test_uniform(&rng, -0.5, 0.5), 1.5};
+        double axis[3] = {0, 0, 1};
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, parent, i, pos, q1, axis, NULL), AQS_OK);
+        back = i++;
+        for (k = 0; k < side && i < NJ; k++, i++) {
+            double p2[3] = {test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), 1.0};
+            double ax[3] = {test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), 1.0};
+            assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, k == 0 ? back : i - 1, i, p2, q1, ax, NULL),
+                             AQS_OK);
+        }
+    }
+    if (aqs_linkage_finalize(L) != AQS_OK) fail_msg("finalize: %s", aqs_linkage_last_error(L));
+    return L;
+}
+
+/* nf forces of 1 N on seeded bodies (the same on every call with seed). */
+static void set_forces(aqs_linkage *L, int nf, uint64_t seed)
+{
+    uint64_t rng = seed;
+    int k;
+    assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+    for (k = 0; k < nf; k++) {
+        int32_t b = (int32_t)test_uniform(&rng, 0, NJ);
+        double f[3] = {test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1)};
+        assert_int_equal(aqs_body_set_force(L, b, f, NULL, NULL), AQS_OK);
+    }
+}
+
+static aqs_solve_stats stats_of(aqs_linkage *L)
+{
+    aqs_solve_stats s;
+    memset(&s, 0, sizeof s);
+    s.size = sizeof s;
+    assert_int_equal(aqs_linkage_get_stats(L, &s), AQS_OK);
+    return s;
+}
+
+static void test_setting(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    int32_t on = -1;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_auto(L, &on), AQS_OK); /* before finalize too */
+    assert_int_equal(on, 1);
+    assert_int_equal(aqs_linkage_set_auto(L, 2), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "enabled = 2");
+    assert_int_equal(aqs_linkage_set_auto(L, -1), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "enabled = -1");
+    assert_int_equal(aqs_linkage_get_auto(L, &on), AQS_OK);
+    assert_int_equal(on, 1);
+    assert_int_equal(aqs_linkage_get_auto(L, NULL), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "enabled is NULL");
+    assert_int_equal(aqs_linkage_set_auto(NULL, 0), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_auto(NULL, &on), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_get_auto(L, &on), AQS_OK);
+    assert_int_equal(on, 0);
+    aqs_linkage_destroy(L);
+}
+
+/* The adaptive step's cost from a twin's counts (the same formula as the
+ * model, but from what the twin's step really did). */
+static double adaptive_step_cost(const aqs_solve_stats *t, int32_t ne)
+{
+    (void)ne;
+    return t->nodes_updated * COST_DCA_NODE_SQRT + t->factors_updated * COST_FACTOR +
+           t->nodes_processed * (COST_PROCESS + COST_MOVE);
+}
+
+static void test_choice_follows_counts(void **state)
+{
+    /* 1 force: far below the break-even; 2-8: around it; 400: far above */
+    static const int forces[] = {1, 2, 3, 5, 8, 400};
+    int c, near = 0, adaptive_kept = 0;
+    (void)state;
+    for (c = 0; c < (int)(sizeof forces / sizeof forces[0]); c++) {
+        aqs_linkage *L = molecule(7), *T = molecule(7);
+        const double eps = ldexp(1.0, -19);
+        int32_t ne, step, exact_steps = 0, agree = 0, compared = 0;
+        assert_int_equal(aqs_linkage_get_sizes(L, NULL, &ne, NULL, NULL), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(T, 0), AQS_OK);
+        set_forces(L, forces[c], 11);
+        set_forces(T, forces[c], 11);
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, eps), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(T, AQS_METRIC_REL_JOINT, eps), AQS_OK);
+        /* the first solve after the tolerance is set is adaptive */
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        {
+            aqs_solve_stats s = stats_of(L);
+            assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+            assert_int_equal(s.auto_chosen, 0);
+            assert_true(s.cost_adaptive == 0.0 && s.cost_exact == 0.0);
+        }
+        assert_int_equal(aqs_linkage_solve(T), AQS_OK);
+        for (step = 0; step < 8; step++) {
+            aqs_solve_stats s, t;
+            double twin_cost, exact_cost = ne * (COST_ABA_JOINT + COST_ABA_MOVE);
+            assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+            assert_int_equal(aqs_linkage_step(T, 1e-3), AQS_OK);
+            s = stats_of(L);
+            t = stats_of(T);
+            assert_int_equal(s.auto_chosen, 1);
+            assert_true(s.cost_adaptive > 0.0 && s.cost_exact == exact_cost);
+            twin_cost = adaptive_step_cost(&t, ne);
+            if (s.path == AQS_PATH_EXACT_ABA) {
+                exact_steps++;
+                assert_true(s.error_bound == 0.0);
+                assert_int_equal(s.computed_joints, s.counted_joints);
+                assert_int_equal(s.nodes_updated, 0);
+            } else {
+                assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+                assert_true(s.error_bound <= eps);
+                assert_int_equal(s.computed_joints, t.computed_joints); /* the same steps so far */
+                assert_int_equal(s.nodes_updated, t.nodes_updated);
+            }
+            /* the choice agrees with what the twin's adaptive step really did
+             * (L's tree is as fresh as the twin's until L's first exact
+             * step); within 5 % of the break-even either is right */
+            if (fabs(twin_cost - exact_cost) > 0.05 * exact_cost) {
+                compared++;
+                if ((twin_cost < exact_cost) == (s.path == AQS_PATH_ADAPTIVE)) agree++;
+            } else {
+                near++;
+            }
+            if (s.path == AQS_PATH_EXACT_ABA) break; /* the twin's positions differ from here */
+        }
+        assert_int_equal(agree, compared);
+        if (exact_steps == 0) adaptive_kept++; /* the adaptive path, kept while it is cheaper */
+        if (c == 0) assert_int_equal(exact_steps, 0);             /* one force: adaptive throughout */
+        if (forces[c] == 400) assert_true(exact_steps == 1 && step == 0); /* exact from the first step */
+        aqs_linkage_destroy(L);
+        aqs_linkage_destroy(T);
+    }
+    assert_true(adaptive_kept >= 2);
+    (void)near;
+}
+
+/* max over joints of the difference against the exact accelerations, and
+ * the rel_joint error measure over the uncomputed joints. */
+static void compare(aqs_linkage *L, const double *exact, const double *approx, int32_t nv,
+                    double *rel_joint, double *computed_diff)
+{
+    int32_t j, nj;
+    double maxe = 0.0, maxu = 0.0, maxc = 0.0;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, NULL), AQS_OK);
+    (void)nv;
+    for (j = 0; j < nj; j++) {
+        int32_t off, computed;
+        assert_int_equal(aqs_joint_get_layout(L, j, NULL, NULL, &off, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_get_computed(L, j, &computed), AQS_OK);
+        if (fabs(exact[off]) > maxe) maxe = fabs(exact[off]);
+        if (computed) {
+            if (fabs(exact[off] - approx[off]) > maxc) maxc = fabs(exact[off] - approx[off]);
+        } else {
+            assert_true(approx[off] == 0.0);
+            if (fabs(exact[off]) > maxu) maxu = fabs(exact[off]);
+        }
+    }
+    *rel_joint = maxe > 0.0 ? maxu / maxe : 0.0;
+    *computed_diff = maxe > 0.0 ? maxc / maxe : 0.0;
+}
+
+static void test_mixed_trajectory(void **state)
+{
+    aqs_linkage *L = molecule(3), *X = molecule(3);
+    const double eps = ldexp(1.0, -10);
+    int32_t nq, nv, step, adaptive = 0, exact = 0, back = 0, last = -1;
+    double *q, *a, *e;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, &nv), AQS_OK);
+    q = malloc(sizeof(double) * (size_t)nq);
+    a = malloc(sizeof(double) * (size_t)nv);
+    e = malloc(sizeof(double) * (size_t)nv);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, eps), AQS_OK);
+    for (step = 0; step < 70; step++) {
+        aqs_solve_stats s;
+        double err, cdiff;
+        /* one force, then 400 (exact is cheaper), then one again */
+        if (step == 0 || step == 10 || step == 25) set_forces(L, step == 10 ? 400 : 1, 5 + (uint64_t)step);
+        /* the exact twin at L's positions and loads, solved by the ABA */
+        assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
+        assert_int_equal(aqs_linkage_set_positions(X, q, (size_t)nq), AQS_OK);
+        if (step == 0 || step == 10 || step == 25) set_forces(X, step == 10 ? 400 : 1, 5 + (uint64_t)step);
+        assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(X, e, (size_t)nv), AQS_OK);
+        assert_int_equal(aqs_linkage_step(L, 2e-3), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(aqs_linkage_get_accelerations(L, a, (size_t)nv), AQS_OK);
+        compare(L, e, a, nv, &err, &cdiff);
+        /* the computed joints are exact (the DCA and the ABA agree to
+         * rounding), the others within the certified bound */
+        assert_true(cdiff <= 1e-10);
+        assert_true(err <= s.error_bound * (1.0 + 1e-9) + 1e-12);
+        if (s.path == AQS_PATH_EXACT_ABA) {
+            exact++;
+            assert_true(s.error_bound == 0.0 && err == 0.0);
+            assert_int_equal(s.computed_joints, s.counted_joints);
+        } else {
+            assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+            assert_true(s.error_bound <= eps);
+            assert_true(s.computed_joints < s.counted_joints);
+            adaptive++;
+            if (last == AQS_PATH_EXACT_ABA) back++; /* after exact steps: the whole tree recomputed */
+        }
+        last = s.path;
+    }
+    assert_true(adaptive > 0 && exact > 0);
+    assert_true(back >= 1);
+    free(q);
+    free(a);
+    free(e);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
+}
+
+static void test_off_and_on(void **state)
+{
+    aqs_linkage *L = molecule(9);
+    int k;
+    (void)state;
+    set_forces(L, 400, 2);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    for (k = 0; k < 3; k++) {
+        aqs_solve_stats s;
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+        assert_int_equal(s.auto_chosen, 0);
+        assert_true(s.cost_adaptive == 0.0 && s.cost_exact == 0.0);
+    }
+    assert_int_equal(aqs_linkage_set_auto(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK); /* adaptive first, to learn */
+    assert_int_equal(stats_of(L).path, AQS_PATH_ADAPTIVE);
+    for (k = 0; k < 3; k++) {
+        aqs_solve_stats s;
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.path, AQS_PATH_EXACT_ABA);
+        assert_int_equal(s.auto_chosen, 1);
+        assert_true(s.cost_adaptive > s.cost_exact);
+        assert_int_equal(s.fallback, 0);
+    }
+    /* refine after an exact solve: nothing to do */
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_refine(L, ldexp(1.0, -25)), AQS_OK);
+    assert_true(stats_of(L).error_bound == 0.0);
+    /* eps = 0: exact by the chosen exact solver, never the model's choice */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(stats_of(L).path, AQS_PATH_EXACT_ABA);
+    assert_int_equal(stats_of(L).auto_chosen, 0);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(stats_of(L).path, AQS_PATH_EXACT_DCA);
+    /* a cap: the adaptive solver, never a choice */
+    assert_int_equal(aqs_linkage_set_max_computed(L, 50), AQS_OK);
+    for (k = 0; k < 3; k++) {
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(stats_of(L).path, AQS_PATH_ADAPTIVE);
+        assert_int_equal(stats_of(L).auto_chosen, 0);
+    }
+    aqs_linkage_destroy(L);
+}
+
+static void test_fallback_first(void **state)
+{
+    aqs_linkage *L = molecule(9);
+    aqs_solve_stats s;
+    int k;
+    (void)state;
+    set_forces(L, 400, 2);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.2), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK); /* adaptive, computes most joints */
+    s = stats_of(L);
+    assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+    assert_true(s.computed_joints > s.counted_joints / 5);
+    for (k = 0; k < AQS_FALLBACK_RUN; k++) {
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.path, AQS_PATH_EXACT_ABA);
+        assert_int_equal(s.fallback, 1);
+        assert_int_equal(s.auto_chosen, 0);
+    }
+    /* the fallback's probe: the model decides it; after exact steps the
+     * whole tree is stale, so exact is cheaper */
+    assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+    s = stats_of(L);
+    assert_int_equal(s.fallback, 0);
+    assert_int_equal(s.auto_chosen, 1);
+    assert_true(s.cost_adaptive > s.cost_exact);
+    assert_int_equal(s.path, AQS_PATH_EXACT_ABA);
+    /* solves without a move after an adaptive solve: the tree is current,
+     * and back-substituting every node (no update) is cheaper than the ABA:
+     * the model takes the adaptive path */
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* adaptive first after set_auto */
+    for (k = 0; k < 3; k++) {
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.auto_chosen, 1);
+        assert_true(s.cost_adaptive < s.cost_exact);
+        assert_int_equal(s.path, AQS_PATH_ADAPTIVE);
+    }
+    aqs_linkage_destroy(L);
+}
+
+static void test_caller_staleness_is_no_switch(void **state)
+{
+    aqs_linkage *L = molecule(3);
+    int32_t nq, k, exact = 0, back = 0;
+    double *q;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, NULL), AQS_OK);
+    q = malloc(sizeof(double) * (size_t)nq);
+    set_forces(L, 1, 5);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -10)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* adaptive, learns */
+    assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
+    for (k = 0; k < 60; k++) {
+        aqs_solve_stats s;
+        q[k % nq] += 1e-3; /* a new configuration, set in bulk */
+        assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        s = stats_of(L);
+        assert_int_equal(s.auto_chosen, 1);
+        exact += s.path == AQS_PATH_EXACT_ABA;
+    }
+    assert_int_equal(exact, 60); /* never the full update */
+    /* steps: the exact step's own staleness is a switch cost, repaid by the
+     * cheaper adaptive steps after enough exact ones */
+    for (k = 0; k < 60 && !back; k++) {
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        back = stats_of(L).path == AQS_PATH_ADAPTIVE;
+    }
+    assert_true(back);
+    free(q);
+    aqs_linkage_destroy(L);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_setting),
+        cmocka_unit_test(test_choice_follows_counts),
+        cmocka_unit_test(test_mixed_trajectory),
+        cmocka_unit_test(test_off_and_on),
+        cmocka_unit_test(test_fallback_first),
+        cmocka_unit_test(test_caller_staleness_is_no_switch),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
