@@ -43,6 +43,7 @@ static void dca_leaf_phi(aqs_linkage *L, int32_t n)
     tree *t = &L->t;
     node *nd = &t->nodes[n];
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
+    nd->jw = 0;
     nd->grounded = nd->comp == L->m.ncomp;
     if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
     else model_comp_mass(L, nd->comp, t->data + nd->ic);
@@ -276,27 +277,45 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
 }
 
 
+/* Row o of the stacked outer rows (a node's storage order: the handle its
+ * parent joins first, jh, then the others in handle order) as a row of the
+ * node's handle order (FX, QX, b, the handle forces). */
+static int32_t slot_of(int32_t i, int32_t jh)
+{
+    return jh <= 0 ? i : i == jh ? 0 : i < jh ? i + 1 : i;
+}
+
+static int32_t slot_row(int32_t o, int32_t jh)
+{
+    const int32_t s = o / 6;
+    if (jh <= 0) return o;
+    return 6 * (s == 0 ? jh : s <= jh ? s - 1 : s) + o % 6;
+}
+
 /* The joint's coefficients of node n from the rows reduced by the constraint
- * reflections (all ncol wide): X = [X1 X2] the outer rows, Lc the first c
- * columns of the c constraint rows (lower triangular), K = [K1 K2] the
- * reflected L_k. With E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
- *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Sd^T K2 X2^T,
- *   U = Sd^T (1 - K1 E),  rho = -U beta + Sd^T K2 K2^T Sd Q,
+ * reflections (ld = ncol columns; only the first w can be non-zero in the
+ * constraint and relative rows): X = [X1 X2] the outer rows (storage order,
+ * slot_row), Lc the first c columns of the c constraint rows (lower
+ * triangular), Kp = [Kp1 Kp2] the reflected Sd^T L_k (d rows). With
+ * E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
+ *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Kp2 X2^T,
+ *   U = Sd^T (1 - K1 E) = Sd^T - Kp1 E,  rho = -U beta + Kp2 Kp2^T Q,
  *   gamma = E^T E beta + U^T Q,
- *   b_C = b_o + X2 K2^T Sd Q + X1 E beta,
+ *   b_C = b_o + X2 Kp2^T Q + X1 E beta,
  * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
  * products of reduced factors only, no large mobility subtracted from
- * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b. */
-static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *Tc,
-                              const double *X, const double *Lc, const double *K, int32_t ncol,
-                              const double beta[6], const double *Q, const double *bo)
+ * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b (handle
+ * order); kq: w scratch doubles. */
+static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
+                              const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
+                              int32_t jh, const double beta[6], const double *Q, const double *bo, double *kq)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
     double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *bC = t->data + C->bv;
     const int32_t c = 6 - d, orows = 6 * C->nh;
-    double E[36], U[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
+    double E[36], U[36], G2[36], Eb[6], gw[6];
     int32_t i, j, k, r, o;
     /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
     for (j = 0; j < 6; j++)
@@ -307,31 +326,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
             if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
             E[6 * i + j] = x / piv;
         }
-    /* Sd = S (S^T S)^-1 */
-    for (i = 0; i < d; i++)
-        for (j = 0; j < d; j++) {
-            double x = 0.0;
-            for (k = 0; k < 6; k++) x += S[k * d + i] * S[k * d + j];
-            StS[d * i + j] = x;
-        }
-    if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < d; j++) {
-            double x = 0.0;
-            for (k = 0; k < d; k++) x += S[i * d + k] * StSi[d * k + j];
-            Sd[i * d + j] = x;
-        }
-    /* P6 = 1 - K1 E; U = Sd^T P6 */
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double x = i == j ? 1.0 : 0.0;
-            for (k = 0; k < c; k++) x -= K[(int64_t)i * ncol + k] * E[6 * k + j];
-            P6[6 * i + j] = x;
-        }
+    /* U = Sd^T - Kp1 E */
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
-            double x = 0.0;
-            for (k = 0; k < 6; k++) x += Sd[k * d + r] * P6[6 * k + j];
+            double x = Sd[j * d + r];
+            for (k = 0; k < c; k++) x -= Kp[(int64_t)r * ncol + k] * E[6 * k + j];
             U[6 * r + j] = x;
         }
     for (k = 0; k < c; k++) {
@@ -339,37 +338,37 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
         for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
         Eb[k] = x;
     }
-    /* FX = -E^T X1^T, and b_o + X1 E beta */
+    /* G2 = Kp2 Kp2^T; kq = Kp2^T Q (columns c .. w-1; zero beyond) */
+    for (r = 0; r < d; r++)
+        for (j = 0; j <= r; j++) {
+            const double *kr = Kp + (int64_t)r * ncol, *kj = Kp + (int64_t)j * ncol;
+            double x = 0.0;
+            for (k = c; k < w; k++) x += kr[k] * kj[k];
+            G2[d * r + j] = G2[d * j + r] = x;
+        }
+    for (k = c; k < w; k++) {
+        double x = 0.0;
+        for (r = 0; r < d; r++) x += Kp[(int64_t)r * ncol + k] * Q[r];
+        kq[k - c] = x;
+    }
+    /* per outer row: FX = -E^T X1^T, QX = -Kp2 X2^T, b_C = b_o + X1 E beta + X2 Kp2^T Q */
     for (o = 0; o < orows; o++) {
         const double *x1 = X + (int64_t)o * ncol;
-        double sb = 0.0;
+        const int32_t oh = slot_row(o, jh);
+        double sb = bo[oh];
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
-            FX[(int64_t)i * orows + o] = x;
+            FX[(int64_t)i * orows + oh] = x;
         }
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
-        bC[o] = bo[o] + sb;
-    }
-    /* K2 (6 x (ncol - c)) against Sd: kSd = K2^T Sd per column; G2 = Sd^T K2 K2^T Sd,
-     * QX = -Sd^T K2 X2^T, b_C += X2 K2^T Sd Q */
-    memset(G2, 0, sizeof G2);
-    for (i = 0; i < d * orows; i++) QX[i] = 0.0;
-    for (k = c; k < ncol; k++) {
-        double kq = 0.0;
+        for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
+        bC[oh] = sb;
         for (r = 0; r < d; r++) {
+            const double *kr = Kp + (int64_t)r * ncol;
             double x = 0.0;
-            for (i = 0; i < 6; i++) x += K[(int64_t)i * ncol + k] * Sd[i * d + r];
-            kSd[r] = x;
-            kq += x * Q[r];
-        }
-        for (r = 0; r < d; r++)
-            for (j = 0; j < d; j++) G2[d * r + j] += kSd[r] * kSd[j];
-        for (o = 0; o < orows; o++) {
-            double x2 = X[(int64_t)o * ncol + k];
-            if (x2 == 0.0) continue;
-            for (r = 0; r < d; r++) QX[(int64_t)r * orows + o] -= kSd[r] * x2;
-            bC[o] += x2 * kq;
+            for (k = c; k < w; k++) x -= kr[k] * x1[k];
+            QX[(int64_t)r * orows + oh] = x;
         }
     }
     for (r = 0; r < d; r++) {
@@ -383,9 +382,9 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
         double x = 0.0;
         for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
         for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
-        w[i] = x;
+        gw[i] = x;
     }
-    memcpy(gamma, w, sizeof w);
+    memcpy(gamma, gw, sizeof gw);
     return 0;
 }
 
@@ -411,9 +410,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     double *IC = t->data + C->ic, *LC = t->data + C->lam;
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
-    const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
-    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = M + (int64_t)(orows + c) * ncol;
-    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36];
+    /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
+     * the children's join blocks (A's handle ka, B's kb, stored first) use only
+     * their first jw columns, so the constraint and relative rows span the
+     * first w columns and the reflections touch only those. */
+    const int32_t a6 = A->jw, b6 = B->jw, w = 6 + a6 + b6;
+    const int32_t rows = orows + 6; /* outer rows, c constraint rows, d relative rows */
+    /* C's rows in storage order: the handle its parent joins (jh) first */
+    const int32_t jA = C->ka, jB = C->kb; /* the children's join handles */
+    const int32_t jh = C->parent < 0 ? 0 : t->nodes[C->parent].a == n ? t->nodes[C->parent].ka
+                                                                       : t->nodes[C->parent].kb;
+    double *M = t->hscratch, *rel = M + (int64_t)orows * ncol, *v = M + (int64_t)rows * ncol;
+    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36], Sd[36];
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
 
@@ -505,59 +513,109 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
-    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) {
+        const int32_t s = slot_of(ci, jh); /* C's slot of handle ci */
+        xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * s * ncol, ncol);
+    }
+    /* The children's outer rows (their slot of handle i: i + 1 before the join
+     * handle, i after it), each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
+        const double *la;
+        double *m;
+        int32_t s;
         if (i == C->ka) continue;
-        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6, LA + (int64_t)(6 * i + r) * ldA,
-                                       sizeof(double) * (size_t)rA);
+        s = slot_of(ci, jh);
+        la = LA + (int64_t)6 * slot_of(i, jA) * ldA;
+        m = M + (int64_t)6 * s * ncol;
+        for (r = 0; r < 6; r++) {
+            memcpy(m + (int64_t)r * ncol + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
+            memcpy(m + (int64_t)r * ncol + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
+        }
         ci++;
     }
     for (i = 0; i < nB; i++) {
+        const double *lb;
+        double *m;
+        int32_t s;
         if (i == C->kb) continue;
-        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6 + rA, LB + (int64_t)(6 * i + r) * ldB,
-                                       sizeof(double) * (size_t)rB);
+        s = slot_of(ci, jh);
+        lb = LB + (int64_t)6 * slot_of(i, jB) * ldB;
+        m = M + (int64_t)6 * s * ncol;
+        for (r = 0; r < 6; r++) {
+            memcpy(m + (int64_t)r * ncol + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
+            memcpy(m + (int64_t)r * ncol + w + rA - a6, lb + (int64_t)r * ldB + b6,
+                   sizeof(double) * (size_t)(rB - b6));
+        }
         ci++;
     }
-    /* The relative acceleration across k (B's minus A's), in k's child frame. */
+    /* The relative acceleration across k (B's minus A's), in k's child frame:
+     * the join blocks are the children's first 6 rows. */
     xform_cols(&PkbF, Lm, rel, ncol);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
-    for (j = 0; j < rA; j++) {
+    for (j = 0; j < a6; j++) {
         double col[6], o[6];
-        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
+        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * slot_of(C->ka, jA) + r) * ldA + j];
         spatial_xform_motion(J, col, o);
         for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
     }
     for (r = 0; r < 6; r++)
-        for (j = 0; j < rB; j++) rel[ncol * r + 6 + rA + j] = LB[(int64_t)(6 * C->kb + r) * ldB + j];
+        memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * slot_of(C->kb, jB) + r) * ldB, sizeof(double) * (size_t)b6);
+    /* Sd = S (S^T S)^-1 */
+    {
+        double StS[36], StSi[36];
+        for (i = 0; i < d; i++)
+            for (j = 0; j < d; j++) {
+                double x = 0.0;
+                for (r = 0; r < 6; r++) x += S[r * d + i] * S[r * d + j];
+                StS[d * i + j] = x;
+            }
+        if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < d; j++) {
+                double x = 0.0;
+                for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
+                Sd[i * d + j] = x;
+            }
+    }
+    /* In place, column by column: the c constraint rows Tc^T L_k, then the d
+     * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
     complement(S, d, Tc);
-    for (q = 0; q < c; q++) {
-        double *row = M + (int64_t)(orows + q) * ncol;
-        for (r = 0; r < 6; r++) {
-            double w = Tc[6 * r + q];
-            if (w == 0.0) continue;
-            for (j = 0; j < ncol; j++) row[j] += w * rel[ncol * r + j];
+    for (j = 0; j < w; j++) {
+        double col[6];
+        for (r = 0; r < 6; r++) col[r] = rel[ncol * r + j];
+        for (q = 0; q < c; q++) {
+            double x = 0.0;
+            for (r = 0; r < 6; r++) x += Tc[6 * r + q] * col[r];
+            rel[ncol * q + j] = x;
+        }
+        for (q = 0; q < d; q++) {
+            double x = 0.0;
+            for (r = 0; r < 6; r++) x += Sd[r * d + q] * col[r];
+            rel[ncol * (c + q) + j] = x;
         }
     }
-    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, ncol, v);
+    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, w, v);
     {
         /* b of the outer handles, in C's handle order */
-        double *bo = v + ncol; /* 6 nh doubles after the reflection vector */
+        double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
         const double *bA = t->data + A->bv, *bB = t->data + B->bv;
         for (i = 0, ci = 0; i < nA; i++)
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, S, d, Tc, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
+        if (joint_coefficients(L, n, Sd, d, Tc, M, rel, rel + (int64_t)c * ncol, ncol, w, jh, beta, Q, bo, kq) != 0)
+            return -1;
     }
-    /* What the outer rows keep right of the c pivots is Lambda_C, compressed
-     * to lower-trapezoidal form (at most 6nh columns). */
     /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
-     * internal dofs), else compressed to lower-trapezoidal form by reflections. */
+     * internal dofs), else compressed to lower-trapezoidal form by reflections,
+     * the parent's join block first: it then uses only its first 6 columns. */
     rank = ncol - c;
+    C->jw = rank;
     if (rank > orows) {
         for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
         rank = orows;
+        C->jw = 6;
     }
     for (r = 0; r < orows; r++) {
         memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
