@@ -89,13 +89,14 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
  * I^-1 = E^T diag(Ic^-1, 1/m) E exactly, so neither a lever arm nor a tiny
  * Ic costs digits (a 6x6 Cholesky of I in a far frame does). */
 
-/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
- * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
-static int mp_inverse_factor(const double *mp, double *Y)
+/* The centre-of-mass part of the factor below: Jc (3x3, Ic^-1 = Jc Jc^T,
+ * Jc = Lc^-T, Ic = Lc Lc^T) and sm = 1/sqrt(m). -1 if Ic is not positive
+ * definite (or a mass property is not finite). */
+static int mp_factor(const double *mp, double Jc[9], double *sm)
 {
-    const double m = mp[0], *c = mp + 1, *Ic = mp + 4;
-    double l00, l10, l11, l20, l21, l22, Li[9], Jc[9], S[9];
-    int i, j, k;
+    const double m = mp[0], *Ic = mp + 4;
+    double l00, l10, l11, l20, l21, l22, Li[9];
+    int i, j;
     for (i = 0; i < 13; i++) /* a part 1e300 m out: its inertia overflowed */
         if (!isfinite(mp[i])) return -1;
     if (!(m > 0.0)) return -1;
@@ -121,6 +122,16 @@ static int mp_inverse_factor(const double *mp, double *Y)
     Li[6] = -(l20 * Li[0] + l21 * Li[3]) / l22;
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++) Jc[3 * i + j] = Li[3 * j + i];
+    *sm = 1.0 / sqrt(m);
+    return 0;
+}
+
+/* Y (6x6) = [Jc 0; -S^T Jc  sm 1], S = skew(c): I^-1 = Y Y^T for the mass
+ * properties of mp_factor with their centre of mass at c. */
+static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
+{
+    double S[9];
+    int i, j, k;
     S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
     S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
     S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
@@ -132,7 +143,16 @@ static int mp_inverse_factor(const double *mp, double *Y)
             for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
             Y[6 * (3 + i) + j] = s;
         }
-    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = 1.0 / sqrt(m);
+    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = sm;
+}
+
+/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
+ * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
+static int mp_inverse_factor(const double *mp, double *Y)
+{
+    double Jc[9], sm;
+    if (mp_factor(mp, Jc, &sm) != 0) return -1;
+    mp_y(Jc, sm, mp + 1, Y);
     return 0;
 }
 
@@ -277,25 +297,9 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
 }
 
 
-/* Row o of the stacked outer rows (a node's storage order: the handle its
- * parent joins first, jh, then the others in handle order) as a row of the
- * node's handle order (FX, QX, b, the handle forces). */
-static int32_t slot_of(int32_t i, int32_t jh)
-{
-    return jh <= 0 ? i : i == jh ? 0 : i < jh ? i + 1 : i;
-}
-
-static int32_t slot_row(int32_t o, int32_t jh)
-{
-    const int32_t s = o / 6;
-    if (jh <= 0) return o;
-    return 6 * (s == 0 ? jh : s <= jh ? s - 1 : s) + o % 6;
-}
-
 /* The joint's coefficients of node n from the rows reduced by the constraint
  * reflections (ld = ncol columns; only the first w can be non-zero in the
- * constraint and relative rows): X = [X1 X2] the outer rows (storage order,
- * slot_row), Lc the first c columns of the c constraint rows (lower
+ * constraint and relative rows): X = [X1 X2] the outer rows, Lc the first c columns of the c constraint rows (lower
  * triangular), Kp = [Kp1 Kp2] the reflected Sd^T L_k (d rows). With
  * E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
  *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Kp2 X2^T,
@@ -304,11 +308,11 @@ static int32_t slot_row(int32_t o, int32_t jh)
  *   b_C = b_o + X2 Kp2^T Q + X1 E beta,
  * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
  * products of reduced factors only, no large mobility subtracted from
- * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b (handle
- * order); kq: w scratch doubles. */
+ * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b; kq: w
+ * scratch doubles. */
 static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
                               const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
-                              int32_t jh, const double beta[6], const double *Q, const double *bo, double *kq)
+                              const double beta[6], const double *Q, const double *bo, double *kq)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
@@ -354,21 +358,20 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     /* per outer row: FX = -E^T X1^T, QX = -Kp2 X2^T, b_C = b_o + X1 E beta + X2 Kp2^T Q */
     for (o = 0; o < orows; o++) {
         const double *x1 = X + (int64_t)o * ncol;
-        const int32_t oh = slot_row(o, jh);
-        double sb = bo[oh];
+        double sb = bo[o];
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
-            FX[(int64_t)i * orows + oh] = x;
+            FX[(int64_t)i * orows + o] = x;
         }
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
         for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
-        bC[oh] = sb;
+        bC[o] = sb;
         for (r = 0; r < d; r++) {
             const double *kr = Kp + (int64_t)r * ncol;
             double x = 0.0;
             for (k = c; k < w; k++) x -= kr[k] * x1[k];
-            QX[(int64_t)r * orows + oh] = x;
+            QX[(int64_t)r * orows + o] = x;
         }
     }
     for (r = 0; r < d; r++) {
@@ -411,15 +414,14 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
-     * the children's join blocks (A's handle ka, B's kb, stored first) use only
-     * their first jw columns, so the constraint and relative rows span the
-     * first w columns and the reflections touch only those. */
+     * the children's join blocks (A's handle ka, B's kb) use only their first
+     * jw columns, so the constraint and relative rows span the first w columns
+     * and the reflections touch only those. */
     const int32_t a6 = A->jw, b6 = B->jw, w = 6 + a6 + b6;
     const int32_t rows = orows + 6; /* outer rows, c constraint rows, d relative rows */
-    /* C's rows in storage order: the handle its parent joins (jh) first */
-    const int32_t jA = C->ka, jB = C->kb; /* the children's join handles */
-    const int32_t jh = C->parent < 0 ? 0 : t->nodes[C->parent].a == n ? t->nodes[C->parent].ka
-                                                                       : t->nodes[C->parent].kb;
+    /* the handle C's parent joins */
+    const int32_t jh = C->parent < 0 ? -1 : t->nodes[C->parent].a == n ? t->nodes[C->parent].ka
+                                                                        : t->nodes[C->parent].kb;
     double *M = t->hscratch, *rel = M + (int64_t)orows * ncol, *v = M + (int64_t)rows * ncol;
     double IB[13], Lm[36], ZA[36], ZB[36], Tc[36], Sd[36];
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
@@ -451,41 +453,58 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
      * Z_A = I_A^-1 Lm^-T = Y_A (Lm^-1 Y_A)^T, Z_B = -Y_B (Lm^-1 Y_B)^T by
      * forward substitution. */
     {
-        double Yr[6 * 12], vr[12], YA[36], YB[36], mA[13], mB[13], cF[3] = {0, 0, 0}, wa = -1.0, wb = -1.0;
-        memcpy(mA, IA, sizeof mA);
-        memcpy(mB, IB, sizeof mB);
+        double G[36], H[27], vr[9], YA[36], YB[36], JA[9], JB[9], cA[3], cB[3], cF[3] = {0, 0, 0};
+        double sA = 0.0, sB = 0.0, wa = -1.0, wb = -1.0;
         if (!A->grounded) {
-            if (mp_inverse_factor(mA, YA) != 0) return -1;
+            if (mp_factor(IA, JA, &sA) != 0) return -1;
+            mp_y(JA, sA, IA + 1, YA);
             for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
         }
         if (!B->grounded) {
-            if (mp_inverse_factor(mB, YB) != 0) return -1;
+            if (mp_factor(IB, JB, &sB) != 0) return -1;
+            mp_y(JB, sB, IB + 1, YB);
             for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
         }
-        memcpy(cF, (wa >= wb ? mA : mB) + 1, sizeof cF);
+        memcpy(cF, (wa >= wb ? IA : IB) + 1, sizeof cF);
         for (i = 0; i < 3; i++) {
-            mA[1 + i] -= cF[i];
-            mB[1 + i] -= cF[i];
+            cA[i] = IA[1 + i] - cF[i];
+            cB[i] = IB[1 + i] - cF[i];
         }
         if (A->grounded) memset(YA, 0, sizeof YA);
-        else mp_inverse_factor(mA, YA);
+        else mp_y(JA, sA, cA, YA);
         if (B->grounded) memset(YB, 0, sizeof YB);
-        else mp_inverse_factor(mB, YB);
+        else mp_y(JB, sB, cB, YB);
         for (ci = 0; ci < nh; ci++) { /* the handles and k's child frame, seen from F */
             PF[ci] = P[ci];
             for (i = 0; i < 3; i++) PF[ci].p[i] -= cF[i];
         }
         PkbF = Pkb;
         for (i = 0; i < 3; i++) PkbF.p[i] -= cF[i];
-        memset(Yr, 0, sizeof Yr);
+        /* [Y_A Y_B] = [J_A 0 J_B 0; N_A sA 1 N_B sB 1] (N = -S^T J) reflected
+         * into [Lm 0] without its zero blocks: rows 0-2 over the columns of
+         * J_A and J_B (G, 6 x 6), then rows 3-5 over [sA 1 | what rows 0-2 left
+         * in J_B's columns | sB 1] (H, 3 x 9): the same operations, in the same
+         * order, as on the full 6 x 12 matrix, less the products with zeros. */
         for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) {
-                Yr[12 * i + j] = YA[6 * i + j];
-                Yr[12 * i + 6 + j] = YB[6 * i + j];
+            for (j = 0; j < 3; j++) {
+                G[6 * i + j] = YA[6 * i + j];
+                G[6 * i + 3 + j] = YB[6 * i + j];
             }
-        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 6, i, i, 12, vr);
-        for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
+        for (i = 0; i < 3; i++) reflect_row(G, 6, i, 6, i, i, 6, vr);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                H[9 * i + j] = i == j ? sA : 0.0;
+                H[9 * i + 3 + j] = G[6 * (3 + i) + 3 + j];
+                H[9 * i + 6 + j] = i == j ? sB : 0.0;
+            }
+        for (i = 0; i < 3; i++) reflect_row(H, 9, i, 3, i, i, 9, vr);
+        memset(Lm, 0, sizeof Lm);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j <= i; j++) Lm[6 * i + j] = G[6 * i + j];
+        for (i = 0; i < 3; i++) {
+            for (j = 0; j < 3; j++) Lm[6 * (3 + i) + j] = G[6 * (3 + i) + j];
+            for (j = 0; j <= i; j++) Lm[6 * (3 + i) + 3 + j] = H[9 * i + j];
+        }
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
         {
@@ -513,20 +532,14 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
-    for (ci = 0; ci < nh; ci++) {
-        const int32_t s = slot_of(ci, jh); /* C's slot of handle ci */
-        xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * s * ncol, ncol);
-    }
-    /* The children's outer rows (their slot of handle i: i + 1 before the join
-     * handle, i after it), each in its own columns. */
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
         const double *la;
         double *m;
-        int32_t s;
         if (i == C->ka) continue;
-        s = slot_of(ci, jh);
-        la = LA + (int64_t)6 * slot_of(i, jA) * ldA;
-        m = M + (int64_t)6 * s * ncol;
+        la = LA + (int64_t)6 * i * ldA;
+        m = M + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
             memcpy(m + (int64_t)r * ncol + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
             memcpy(m + (int64_t)r * ncol + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
@@ -536,11 +549,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     for (i = 0; i < nB; i++) {
         const double *lb;
         double *m;
-        int32_t s;
         if (i == C->kb) continue;
-        s = slot_of(ci, jh);
-        lb = LB + (int64_t)6 * slot_of(i, jB) * ldB;
-        m = M + (int64_t)6 * s * ncol;
+        lb = LB + (int64_t)6 * i * ldB;
+        m = M + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
             memcpy(m + (int64_t)r * ncol + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
             memcpy(m + (int64_t)r * ncol + w + rA - a6, lb + (int64_t)r * ldB + b6,
@@ -548,19 +559,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         ci++;
     }
-    /* The relative acceleration across k (B's minus A's), in k's child frame:
-     * the join blocks are the children's first 6 rows. */
+    /* The relative acceleration across k (B's minus A's), in k's child frame. */
     xform_cols(&PkbF, Lm, rel, ncol);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
     for (j = 0; j < a6; j++) {
         double col[6], o[6];
-        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * slot_of(C->ka, jA) + r) * ldA + j];
+        for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
         spatial_xform_motion(J, col, o);
         for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
     }
     for (r = 0; r < 6; r++)
-        memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * slot_of(C->kb, jB) + r) * ldB, sizeof(double) * (size_t)b6);
+        memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * C->kb + r) * ldB, sizeof(double) * (size_t)b6);
     /* Sd = S (S^T S)^-1 */
     {
         double StS[36], StSi[36];
@@ -604,18 +614,19 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, Sd, d, Tc, M, rel, rel + (int64_t)c * ncol, ncol, w, jh, beta, Q, bo, kq) != 0)
+        if (joint_coefficients(L, n, Sd, d, Tc, M, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq) != 0)
             return -1;
     }
     /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
-     * internal dofs), else compressed to lower-trapezoidal form by reflections,
-     * the parent's join block first: it then uses only its first 6 columns. */
+     * internal dofs), else compressed to lower-trapezoidal form by reflections:
+     * then handle 0's rows use only the first 6 columns (the parent's join
+     * block, when it is handle 0, for the parent's reflections). */
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
         for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
         rank = orows;
-        C->jw = 6;
+        C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
     for (r = 0; r < orows; r++) {
         memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);

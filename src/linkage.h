@@ -41,9 +41,9 @@ typedef struct {
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
                              + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
-    int32_t jw;           /* Lambda's rows are stored with the handle the parent joins first
-                             (then the others in handle order); those 6 rows use only its
-                             first jw columns (<= rank; 6 once compressed) */
+    int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
+                             first jw columns (<= rank; 6 when compressed and that handle is
+                             the first) */
     int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
     int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
