@@ -187,17 +187,25 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
         if (fabs(x[j]) > scale) scale = fabs(x[j]);
     if (scale == 0.0) return; /* nothing right of the pivot */
     if (fabs(x[0]) > scale) scale = fabs(x[0]);
-    {
+    /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
+     * needs): every quantity is O(1), so neither tiny (subnormal) nor huge
+     * entries underflow or overflow in alpha v0. A power-of-two scale changes
+     * every later quantity by an exact power of two, and the reflected rows not
+     * at all, so between 2^-100 and 2^100, where nothing can underflow or
+     * overflow, it is left out: the same results, bit for bit. */
+    if (scale >= 0x1p-100 && scale <= 0x1p100) {
+        for (j = 0; j < m; j++) {
+            v[j] = x[j];
+            ss += v[j] * v[j];
+        }
+    } else {
         int e;
         frexp(scale, &e);
         scale = ldexp(1.0, e); /* a power of two: x / scale is exact */
-    }
-    /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
-     * needs): every quantity is O(1), so neither tiny (subnormal) nor huge
-     * entries underflow or overflow in alpha v0. */
-    for (j = 0; j < m; j++) {
-        v[j] = x[j] / scale;
-        ss += v[j] * v[j];
+        for (j = 0; j < m; j++) {
+            v[j] = x[j] / scale;
+            ss += v[j] * v[j];
+        }
     }
     alpha = sqrt(ss);
     if (v[0] > 0.0) alpha = -alpha;
@@ -509,10 +517,12 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
         {
             double Wa[36], Wb[36];
+            /* Y's upper right 3x3 block is zero, so are Wa's and Wb's (Lm is
+             * lower triangular): left out of the sums (which they do not change) */
             for (j = 0; j < 6; j++)
-                for (i = 0; i < 6; i++) {
+                for (i = j < 3 ? 0 : 3; i < 6; i++) {
                     double xa = YA[6 * i + j], xb = YB[6 * i + j];
-                    for (r = 0; r < i; r++) {
+                    for (r = j < 3 ? 0 : 3; r < i; r++) {
                         xa -= Lm[6 * i + r] * Wa[6 * r + j];
                         xb -= Lm[6 * i + r] * Wb[6 * r + j];
                     }
@@ -521,8 +531,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 }
             for (i = 0; i < 6; i++)
                 for (j = 0; j < 6; j++) {
+                    const int32_t re = i < 3 || j < 3 ? 3 : 6;
                     double sa = 0.0, sb = 0.0;
-                    for (r = 0; r < 6; r++) {
+                    for (r = 0; r < re; r++) {
                         sa += YA[6 * i + r] * Wa[6 * j + r];
                         sb += YB[6 * i + r] * Wb[6 * j + r];
                     }
@@ -591,18 +602,28 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     /* In place, column by column: the c constraint rows Tc^T L_k, then the d
      * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
     complement(S, d, Tc);
-    for (j = 0; j < w; j++) {
-        double col[6];
-        for (r = 0; r < 6; r++) col[r] = rel[ncol * r + j];
-        for (q = 0; q < c; q++) {
-            double x = 0.0;
-            for (r = 0; r < 6; r++) x += Tc[6 * r + q] * col[r];
-            rel[ncol * q + j] = x;
+    {
+        /* the non-zero weights of each new row (a revolute or prismatic joint's
+         * Tc and Sd are mostly zeros; skipping them changes no sum) */
+        double wt[36];
+        int32_t nz[6], ix[36];
+        for (q = 0; q < 6; q++) {
+            nz[q] = 0;
+            for (r = 0; r < 6; r++) {
+                const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
+                if (x == 0.0) continue;
+                wt[6 * q + nz[q]] = x;
+                ix[6 * q + nz[q]++] = r;
+            }
         }
-        for (q = 0; q < d; q++) {
-            double x = 0.0;
-            for (r = 0; r < 6; r++) x += Sd[r * d + q] * col[r];
-            rel[ncol * (c + q) + j] = x;
+        for (j = 0; j < w; j++) {
+            double col[6];
+            for (r = 0; r < 6; r++) col[r] = rel[ncol * r + j];
+            for (q = 0; q < 6; q++) {
+                double x = 0.0;
+                for (r = 0; r < nz[q]; r++) x += wt[6 * q + r] * col[ix[6 * q + r]];
+                rel[ncol * q + j] = x;
+            }
         }
     }
     for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, w, v);
@@ -628,10 +649,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
-    for (r = 0; r < orows; r++) {
+    for (r = 0; r < orows; r++) /* columns rank .. 6nh-1 are never read */
         memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
-        for (j = rank; j < orows; j++) LC[(int64_t)r * orows + j] = 0.0;
-    }
     C->rank = rank;
     return 0;
 }
