@@ -211,10 +211,29 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
-    for (i = r0; i < nrows; i++) {
+    for (i = r0; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, s = 0.0, t = 0.0;
+        for (j = 0; j < m; j++) {
+            s += a[j] * v[j];
+            t += b[j] * v[j];
+        }
+        s *= f;
+        t *= f;
+        if (s != 0.0 && t != 0.0) {
+            for (j = 0; j < m; j++) {
+                a[j] -= s * v[j];
+                b[j] -= t * v[j];
+            }
+        } else if (s != 0.0) {
+            for (j = 0; j < m; j++) a[j] -= s * v[j];
+        } else if (t != 0.0) {
+            for (j = 0; j < m; j++) b[j] -= t * v[j];
+        }
+    }
+    if (i < nrows) {
         double *a = A + (int64_t)ld * i + p, s = 0.0;
         for (j = 0; j < m; j++) s += a[j] * v[j];
-        if (s == 0.0) continue;
+        if (s == 0.0) return;
         s *= f;
         for (j = 0; j < m; j++) a[j] -= s * v[j];
     }
@@ -430,7 +449,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     /* the handle C's parent joins */
     const int32_t jh = C->parent < 0 ? -1 : t->nodes[C->parent].a == n ? t->nodes[C->parent].ka
                                                                         : t->nodes[C->parent].kb;
-    double *M = t->hscratch, *rel = M + (int64_t)orows * ncol, *v = M + (int64_t)rows * ncol;
+    /* M: the c constraint rows and the d relative rows first (rel), then the outer rows (X) */
+    double *M = t->hscratch, *rel = M, *X = M + (int64_t)6 * ncol, *v = M + (int64_t)rows * ncol;
     double IB[13], Lm[36], ZA[36], ZB[36], Tc[36], Sd[36];
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
@@ -543,14 +563,14 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
-    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
     /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
         const double *la;
         double *m;
         if (i == C->ka) continue;
         la = LA + (int64_t)6 * i * ldA;
-        m = M + (int64_t)6 * ci * ncol;
+        m = X + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
             memcpy(m + (int64_t)r * ncol + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
             memcpy(m + (int64_t)r * ncol + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
@@ -562,7 +582,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double *m;
         if (i == C->kb) continue;
         lb = LB + (int64_t)6 * i * ldB;
-        m = M + (int64_t)6 * ci * ncol;
+        m = X + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
             memcpy(m + (int64_t)r * ncol + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
             memcpy(m + (int64_t)r * ncol + w + rA - a6, lb + (int64_t)r * ldB + b6,
@@ -626,7 +646,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             }
         }
     }
-    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, w, v);
+    /* (the rows above q are reduced already: zero from column q on) */
+    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v);
     {
         /* b of the outer handles, in C's handle order */
         double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
@@ -635,7 +656,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, Sd, d, Tc, M, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq) != 0)
+        if (joint_coefficients(L, n, Sd, d, Tc, X, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq) != 0)
             return -1;
     }
     /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
@@ -645,12 +666,12 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
-        for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v);
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
     for (r = 0; r < orows; r++) /* columns rank .. 6nh-1 are never read */
-        memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
+        memcpy(LC + (int64_t)r * orows, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
     C->rank = rank;
     return 0;
 }
