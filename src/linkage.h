@@ -41,15 +41,15 @@ typedef struct {
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
                              + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
-    int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
-                             first jw columns (<= rank; 6 when compressed and that handle is
-                             the first) */
     int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
     int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
+    int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
+                             first jw columns (<= rank; 6 when compressed and that handle is
+                             the first) */
 } node;
 
 typedef struct {
