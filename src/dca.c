@@ -211,7 +211,38 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
-    for (i = r0; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
+    for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+        double s = 0.0, t = 0.0, u = 0.0, z = 0.0;
+        for (j = 0; j < m; j++) {
+            s += a[j] * v[j];
+            t += b[j] * v[j];
+            u += g[j] * v[j];
+            z += h[j] * v[j];
+        }
+        s *= f;
+        t *= f;
+        u *= f;
+        z *= f;
+        if (s != 0.0 && t != 0.0 && u != 0.0 && z != 0.0) {
+            for (j = 0; j < m; j++) {
+                a[j] -= s * v[j];
+                b[j] -= t * v[j];
+                g[j] -= u * v[j];
+                h[j] -= z * v[j];
+            }
+        } else {
+            if (s != 0.0)
+                for (j = 0; j < m; j++) a[j] -= s * v[j];
+            if (t != 0.0)
+                for (j = 0; j < m; j++) b[j] -= t * v[j];
+            if (u != 0.0)
+                for (j = 0; j < m; j++) g[j] -= u * v[j];
+            if (z != 0.0)
+                for (j = 0; j < m; j++) h[j] -= z * v[j];
+        }
+    }
+    for (; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, s = 0.0, t = 0.0;
         for (j = 0; j < m; j++) {
             s += a[j] * v[j];
@@ -311,15 +342,26 @@ static void complement(const double *S, int32_t d, double *Tc)
 }
 
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
- * column by column. */
+ * column by column: spatial_xform_motion's arithmetic, written out. */
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
 {
-    double col[6], o[6];
-    int32_t i, j;
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    int32_t j;
     for (j = 0; j < 6; j++) {
-        for (i = 0; i < 6; i++) col[i] = Z[6 * i + j];
-        spatial_xform_motion(P, col, o);
-        for (i = 0; i < 6; i++) out[(int64_t)ld * i + j] = o[i];
+        const double v0 = Z[j], v1 = Z[6 + j], v2 = Z[12 + j];
+        double t0 = Z[18 + j], t1 = Z[24 + j], t2 = Z[30 + j];
+        if (moved) {
+            t0 -= p[1] * v2 - p[2] * v1;
+            t1 -= p[2] * v0 - p[0] * v2;
+            t2 -= p[0] * v1 - p[1] * v0;
+        }
+        out[j] = R[0] * v0 + R[3] * v1 + R[6] * v2;
+        out[(int64_t)ld + j] = R[1] * v0 + R[4] * v1 + R[7] * v2;
+        out[(int64_t)2 * ld + j] = R[2] * v0 + R[5] * v1 + R[8] * v2;
+        out[(int64_t)3 * ld + j] = R[0] * t0 + R[3] * t1 + R[6] * t2;
+        out[(int64_t)4 * ld + j] = R[1] * t0 + R[4] * t1 + R[7] * t2;
+        out[(int64_t)5 * ld + j] = R[2] * t0 + R[5] * t1 + R[8] * t2;
     }
 }
 
