@@ -47,6 +47,9 @@ typedef struct {
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
+    int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
+                             first jw columns (<= rank; 6 when compressed and that handle is
+                             the first) */
 } node;
 
 typedef struct {

@@ -43,6 +43,7 @@ static void dca_leaf_phi(aqs_linkage *L, int32_t n)
     tree *t = &L->t;
     node *nd = &t->nodes[n];
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
+    nd->jw = 0;
     nd->grounded = nd->comp == L->m.ncomp;
     if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
     else model_comp_mass(L, nd->comp, t->data + nd->ic);
@@ -88,13 +89,14 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
  * I^-1 = E^T diag(Ic^-1, 1/m) E exactly, so neither a lever arm nor a tiny
  * Ic costs digits (a 6x6 Cholesky of I in a far frame does). */
 
-/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
- * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
-static int mp_inverse_factor(const double *mp, double *Y)
+/* The centre-of-mass part of the factor below: Jc (3x3, Ic^-1 = Jc Jc^T,
+ * Jc = Lc^-T, Ic = Lc Lc^T) and sm = 1/sqrt(m). -1 if Ic is not positive
+ * definite (or a mass property is not finite). */
+static int mp_factor(const double *mp, double Jc[9], double *sm)
 {
-    const double m = mp[0], *c = mp + 1, *Ic = mp + 4;
-    double l00, l10, l11, l20, l21, l22, Li[9], Jc[9], S[9];
-    int i, j, k;
+    const double m = mp[0], *Ic = mp + 4;
+    double l00, l10, l11, l20, l21, l22, Li[9];
+    int i, j;
     for (i = 0; i < 13; i++) /* a part 1e300 m out: its inertia overflowed */
         if (!isfinite(mp[i])) return -1;
     if (!(m > 0.0)) return -1;
@@ -120,6 +122,16 @@ static int mp_inverse_factor(const double *mp, double *Y)
     Li[6] = -(l20 * Li[0] + l21 * Li[3]) / l22;
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++) Jc[3 * i + j] = Li[3 * j + i];
+    *sm = 1.0 / sqrt(m);
+    return 0;
+}
+
+/* Y (6x6) = [Jc 0; -S^T Jc  sm 1], S = skew(c): I^-1 = Y Y^T for the mass
+ * properties of mp_factor with their centre of mass at c. */
+static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
+{
+    double S[9];
+    int i, j, k;
     S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
     S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
     S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
@@ -131,7 +143,16 @@ static int mp_inverse_factor(const double *mp, double *Y)
             for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
             Y[6 * (3 + i) + j] = s;
         }
-    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = 1.0 / sqrt(m);
+    for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = sm;
+}
+
+/* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
+ * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
+static int mp_inverse_factor(const double *mp, double *Y)
+{
+    double Jc[9], sm;
+    if (mp_factor(mp, Jc, &sm) != 0) return -1;
+    mp_y(Jc, sm, mp + 1, Y);
     return 0;
 }
 
@@ -166,26 +187,84 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
         if (fabs(x[j]) > scale) scale = fabs(x[j]);
     if (scale == 0.0) return; /* nothing right of the pivot */
     if (fabs(x[0]) > scale) scale = fabs(x[0]);
-    {
+    /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
+     * needs): every quantity is O(1), so neither tiny (subnormal) nor huge
+     * entries underflow or overflow in alpha v0. A power-of-two scale changes
+     * every later quantity by an exact power of two, and the reflected rows not
+     * at all, so between 2^-100 and 2^100, where nothing can underflow or
+     * overflow, it is left out: the same results, bit for bit. */
+    if (scale >= 0x1p-100 && scale <= 0x1p100) {
+        for (j = 0; j < m; j++) {
+            v[j] = x[j];
+            ss += v[j] * v[j];
+        }
+    } else {
         int e;
         frexp(scale, &e);
         scale = ldexp(1.0, e); /* a power of two: x / scale is exact */
-    }
-    /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
-     * needs): every quantity is O(1), so neither tiny (subnormal) nor huge
-     * entries underflow or overflow in alpha v0. */
-    for (j = 0; j < m; j++) {
-        v[j] = x[j] / scale;
-        ss += v[j] * v[j];
+        for (j = 0; j < m; j++) {
+            v[j] = x[j] / scale;
+            ss += v[j] * v[j];
+        }
     }
     alpha = sqrt(ss);
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
-    for (i = r0; i < nrows; i++) {
+    for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+        double s = 0.0, t = 0.0, u = 0.0, z = 0.0;
+        for (j = 0; j < m; j++) {
+            s += a[j] * v[j];
+            t += b[j] * v[j];
+            u += g[j] * v[j];
+            z += h[j] * v[j];
+        }
+        s *= f;
+        t *= f;
+        u *= f;
+        z *= f;
+        if (s != 0.0 && t != 0.0 && u != 0.0 && z != 0.0) {
+            for (j = 0; j < m; j++) {
+                a[j] -= s * v[j];
+                b[j] -= t * v[j];
+                g[j] -= u * v[j];
+                h[j] -= z * v[j];
+            }
+        } else {
+            if (s != 0.0)
+                for (j = 0; j < m; j++) a[j] -= s * v[j];
+            if (t != 0.0)
+                for (j = 0; j < m; j++) b[j] -= t * v[j];
+            if (u != 0.0)
+                for (j = 0; j < m; j++) g[j] -= u * v[j];
+            if (z != 0.0)
+                for (j = 0; j < m; j++) h[j] -= z * v[j];
+        }
+    }
+    for (; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, s = 0.0, t = 0.0;
+        for (j = 0; j < m; j++) {
+            s += a[j] * v[j];
+            t += b[j] * v[j];
+        }
+        s *= f;
+        t *= f;
+        if (s != 0.0 && t != 0.0) {
+            for (j = 0; j < m; j++) {
+                a[j] -= s * v[j];
+                b[j] -= t * v[j];
+            }
+        } else if (s != 0.0) {
+            for (j = 0; j < m; j++) a[j] -= s * v[j];
+        } else if (t != 0.0) {
+            for (j = 0; j < m; j++) b[j] -= t * v[j];
+        }
+    }
+    if (i < nrows) {
         double *a = A + (int64_t)ld * i + p, s = 0.0;
         for (j = 0; j < m; j++) s += a[j] * v[j];
-        if (s == 0.0) continue;
+        if (s == 0.0) return;
         s *= f;
         for (j = 0; j < m; j++) a[j] -= s * v[j];
     }
@@ -263,40 +342,53 @@ static void complement(const double *S, int32_t d, double *Tc)
 }
 
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
- * column by column. */
+ * column by column: spatial_xform_motion's arithmetic, written out. */
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
 {
-    double col[6], o[6];
-    int32_t i, j;
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    int32_t j;
     for (j = 0; j < 6; j++) {
-        for (i = 0; i < 6; i++) col[i] = Z[6 * i + j];
-        spatial_xform_motion(P, col, o);
-        for (i = 0; i < 6; i++) out[(int64_t)ld * i + j] = o[i];
+        const double v0 = Z[j], v1 = Z[6 + j], v2 = Z[12 + j];
+        double t0 = Z[18 + j], t1 = Z[24 + j], t2 = Z[30 + j];
+        if (moved) {
+            t0 -= p[1] * v2 - p[2] * v1;
+            t1 -= p[2] * v0 - p[0] * v2;
+            t2 -= p[0] * v1 - p[1] * v0;
+        }
+        out[j] = R[0] * v0 + R[3] * v1 + R[6] * v2;
+        out[(int64_t)ld + j] = R[1] * v0 + R[4] * v1 + R[7] * v2;
+        out[(int64_t)2 * ld + j] = R[2] * v0 + R[5] * v1 + R[8] * v2;
+        out[(int64_t)3 * ld + j] = R[0] * t0 + R[3] * t1 + R[6] * t2;
+        out[(int64_t)4 * ld + j] = R[1] * t0 + R[4] * t1 + R[7] * t2;
+        out[(int64_t)5 * ld + j] = R[2] * t0 + R[5] * t1 + R[8] * t2;
     }
 }
 
 
 /* The joint's coefficients of node n from the rows reduced by the constraint
- * reflections (all ncol wide): X = [X1 X2] the outer rows, Lc the first c
- * columns of the c constraint rows (lower triangular), K = [K1 K2] the
- * reflected L_k. With E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
- *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Sd^T K2 X2^T,
- *   U = Sd^T (1 - K1 E),  rho = -U beta + Sd^T K2 K2^T Sd Q,
+ * reflections (ld = ncol columns; only the first w can be non-zero in the
+ * constraint and relative rows): X = [X1 X2] the outer rows, Lc the first c columns of the c constraint rows (lower
+ * triangular), Kp = [Kp1 Kp2] the reflected Sd^T L_k (d rows). With
+ * E = Lc^-1 Tc^T and Sd = S (S^T S)^-1:
+ *   FX = W M^T = -E^T X1^T,  QX = U M^T = -Kp2 X2^T,
+ *   U = Sd^T (1 - K1 E) = Sd^T - Kp1 E,  rho = -U beta + Kp2 Kp2^T Q,
  *   gamma = E^T E beta + U^T Q,
- *   b_C = b_o + X2 K2^T Sd Q + X1 E beta,
+ *   b_C = b_o + X2 Kp2^T Q + X1 E beta,
  * (M = -L_o L_k^T, W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T, T = L_k L_k^T):
  * products of reduced factors only, no large mobility subtracted from
- * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b. */
-static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double *Tc,
-                              const double *X, const double *Lc, const double *K, int32_t ncol,
-                              const double beta[6], const double *Q, const double *bo)
+ * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b; kq: w
+ * scratch doubles. */
+static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
+                              const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
+                              const double beta[6], const double *Q, const double *bo, double *kq)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
     double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
     double *bC = t->data + C->bv;
     const int32_t c = 6 - d, orows = 6 * C->nh;
-    double E[36], U[36], StS[36], StSi[36], Sd[36], P6[36], G2[36], kSd[6], Eb[6], w[6];
+    double E[36], U[36], G2[36], Eb[6], gw[6];
     int32_t i, j, k, r, o;
     /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
     for (j = 0; j < 6; j++)
@@ -307,31 +399,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
             if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
             E[6 * i + j] = x / piv;
         }
-    /* Sd = S (S^T S)^-1 */
-    for (i = 0; i < d; i++)
-        for (j = 0; j < d; j++) {
-            double x = 0.0;
-            for (k = 0; k < 6; k++) x += S[k * d + i] * S[k * d + j];
-            StS[d * i + j] = x;
-        }
-    if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < d; j++) {
-            double x = 0.0;
-            for (k = 0; k < d; k++) x += S[i * d + k] * StSi[d * k + j];
-            Sd[i * d + j] = x;
-        }
-    /* P6 = 1 - K1 E; U = Sd^T P6 */
-    for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double x = i == j ? 1.0 : 0.0;
-            for (k = 0; k < c; k++) x -= K[(int64_t)i * ncol + k] * E[6 * k + j];
-            P6[6 * i + j] = x;
-        }
+    /* U = Sd^T - Kp1 E */
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
-            double x = 0.0;
-            for (k = 0; k < 6; k++) x += Sd[k * d + r] * P6[6 * k + j];
+            double x = Sd[j * d + r];
+            for (k = 0; k < c; k++) x -= Kp[(int64_t)r * ncol + k] * E[6 * k + j];
             U[6 * r + j] = x;
         }
     for (k = 0; k < c; k++) {
@@ -339,37 +411,36 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
         for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
         Eb[k] = x;
     }
-    /* FX = -E^T X1^T, and b_o + X1 E beta */
+    /* G2 = Kp2 Kp2^T; kq = Kp2^T Q (columns c .. w-1; zero beyond) */
+    for (r = 0; r < d; r++)
+        for (j = 0; j <= r; j++) {
+            const double *kr = Kp + (int64_t)r * ncol, *kj = Kp + (int64_t)j * ncol;
+            double x = 0.0;
+            for (k = c; k < w; k++) x += kr[k] * kj[k];
+            G2[d * r + j] = G2[d * j + r] = x;
+        }
+    for (k = c; k < w; k++) {
+        double x = 0.0;
+        for (r = 0; r < d; r++) x += Kp[(int64_t)r * ncol + k] * Q[r];
+        kq[k - c] = x;
+    }
+    /* per outer row: FX = -E^T X1^T, QX = -Kp2 X2^T, b_C = b_o + X1 E beta + X2 Kp2^T Q */
     for (o = 0; o < orows; o++) {
         const double *x1 = X + (int64_t)o * ncol;
-        double sb = 0.0;
+        double sb = bo[o];
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
             FX[(int64_t)i * orows + o] = x;
         }
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
-        bC[o] = bo[o] + sb;
-    }
-    /* K2 (6 x (ncol - c)) against Sd: kSd = K2^T Sd per column; G2 = Sd^T K2 K2^T Sd,
-     * QX = -Sd^T K2 X2^T, b_C += X2 K2^T Sd Q */
-    memset(G2, 0, sizeof G2);
-    for (i = 0; i < d * orows; i++) QX[i] = 0.0;
-    for (k = c; k < ncol; k++) {
-        double kq = 0.0;
+        for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
+        bC[o] = sb;
         for (r = 0; r < d; r++) {
+            const double *kr = Kp + (int64_t)r * ncol;
             double x = 0.0;
-            for (i = 0; i < 6; i++) x += K[(int64_t)i * ncol + k] * Sd[i * d + r];
-            kSd[r] = x;
-            kq += x * Q[r];
-        }
-        for (r = 0; r < d; r++)
-            for (j = 0; j < d; j++) G2[d * r + j] += kSd[r] * kSd[j];
-        for (o = 0; o < orows; o++) {
-            double x2 = X[(int64_t)o * ncol + k];
-            if (x2 == 0.0) continue;
-            for (r = 0; r < d; r++) QX[(int64_t)r * orows + o] -= kSd[r] * x2;
-            bC[o] += x2 * kq;
+            for (k = c; k < w; k++) x -= kr[k] * x1[k];
+            QX[(int64_t)r * orows + o] = x;
         }
     }
     for (r = 0; r < d; r++) {
@@ -383,9 +454,9 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
         double x = 0.0;
         for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
         for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
-        w[i] = x;
+        gw[i] = x;
     }
-    memcpy(gamma, w, sizeof w);
+    memcpy(gamma, gw, sizeof gw);
     return 0;
 }
 
@@ -411,9 +482,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     double *IC = t->data + C->ic, *LC = t->data + C->lam;
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
-    const int32_t rows = orows + c + 6; /* outer rows, constraint rows, L_k */
-    double *M = t->hscratch, *v = t->hscratch + (int64_t)rows * ncol, *rel = M + (int64_t)(orows + c) * ncol;
-    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36];
+    /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
+     * the children's join blocks (A's handle ka, B's kb) use only their first
+     * jw columns, so the constraint and relative rows span the first w columns
+     * and the reflections touch only those. */
+    const int32_t a6 = A->jw, b6 = B->jw, w = 6 + a6 + b6;
+    const int32_t rows = orows + 6; /* outer rows, c constraint rows, d relative rows */
+    /* the handle C's parent joins */
+    const int32_t jh = C->parent < 0 ? -1 : t->nodes[C->parent].a == n ? t->nodes[C->parent].ka
+                                                                        : t->nodes[C->parent].kb;
+    /* M: the c constraint rows and the d relative rows first (rel), then the outer rows (X) */
+    double *M = t->hscratch, *rel = M, *X = M + (int64_t)6 * ncol, *v = M + (int64_t)rows * ncol;
+    double IB[13], Lm[36], ZA[36], ZB[36], Tc[36], Sd[36];
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
 
@@ -443,49 +523,68 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
      * Z_A = I_A^-1 Lm^-T = Y_A (Lm^-1 Y_A)^T, Z_B = -Y_B (Lm^-1 Y_B)^T by
      * forward substitution. */
     {
-        double Yr[6 * 12], vr[12], YA[36], YB[36], mA[13], mB[13], cF[3] = {0, 0, 0}, wa = -1.0, wb = -1.0;
-        memcpy(mA, IA, sizeof mA);
-        memcpy(mB, IB, sizeof mB);
+        double G[36], H[27], vr[9], YA[36], YB[36], JA[9], JB[9], cA[3], cB[3], cF[3] = {0, 0, 0};
+        double sA = 0.0, sB = 0.0, wa = -1.0, wb = -1.0;
         if (!A->grounded) {
-            if (mp_inverse_factor(mA, YA) != 0) return -1;
+            if (mp_factor(IA, JA, &sA) != 0) return -1;
+            mp_y(JA, sA, IA + 1, YA);
             for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
         }
         if (!B->grounded) {
-            if (mp_inverse_factor(mB, YB) != 0) return -1;
+            if (mp_factor(IB, JB, &sB) != 0) return -1;
+            mp_y(JB, sB, IB + 1, YB);
             for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
         }
-        memcpy(cF, (wa >= wb ? mA : mB) + 1, sizeof cF);
+        memcpy(cF, (wa >= wb ? IA : IB) + 1, sizeof cF);
         for (i = 0; i < 3; i++) {
-            mA[1 + i] -= cF[i];
-            mB[1 + i] -= cF[i];
+            cA[i] = IA[1 + i] - cF[i];
+            cB[i] = IB[1 + i] - cF[i];
         }
         if (A->grounded) memset(YA, 0, sizeof YA);
-        else mp_inverse_factor(mA, YA);
+        else mp_y(JA, sA, cA, YA);
         if (B->grounded) memset(YB, 0, sizeof YB);
-        else mp_inverse_factor(mB, YB);
+        else mp_y(JB, sB, cB, YB);
         for (ci = 0; ci < nh; ci++) { /* the handles and k's child frame, seen from F */
             PF[ci] = P[ci];
             for (i = 0; i < 3; i++) PF[ci].p[i] -= cF[i];
         }
         PkbF = Pkb;
         for (i = 0; i < 3; i++) PkbF.p[i] -= cF[i];
-        memset(Yr, 0, sizeof Yr);
+        /* [Y_A Y_B] = [J_A 0 J_B 0; N_A sA 1 N_B sB 1] (N = -S^T J) reflected
+         * into [Lm 0] without its zero blocks: rows 0-2 over the columns of
+         * J_A and J_B (G, 6 x 6), then rows 3-5 over [sA 1 | what rows 0-2 left
+         * in J_B's columns | sB 1] (H, 3 x 9): the same operations, in the same
+         * order, as on the full 6 x 12 matrix, less the products with zeros. */
         for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) {
-                Yr[12 * i + j] = YA[6 * i + j];
-                Yr[12 * i + 6 + j] = YB[6 * i + j];
+            for (j = 0; j < 3; j++) {
+                G[6 * i + j] = YA[6 * i + j];
+                G[6 * i + 3 + j] = YB[6 * i + j];
             }
-        for (i = 0; i < 6; i++) reflect_row(Yr, 12, 0, 6, i, i, 12, vr);
-        for (i = 0; i < 6; i++)
-            for (j = 0; j < 6; j++) Lm[6 * i + j] = j <= i ? Yr[12 * i + j] : 0.0;
+        for (i = 0; i < 3; i++) reflect_row(G, 6, i, 6, i, i, 6, vr);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                H[9 * i + j] = i == j ? sA : 0.0;
+                H[9 * i + 3 + j] = G[6 * (3 + i) + 3 + j];
+                H[9 * i + 6 + j] = i == j ? sB : 0.0;
+            }
+        for (i = 0; i < 3; i++) reflect_row(H, 9, i, 3, i, i, 9, vr);
+        memset(Lm, 0, sizeof Lm);
+        for (i = 0; i < 3; i++)
+            for (j = 0; j <= i; j++) Lm[6 * i + j] = G[6 * i + j];
+        for (i = 0; i < 3; i++) {
+            for (j = 0; j < 3; j++) Lm[6 * (3 + i) + j] = G[6 * (3 + i) + j];
+            for (j = 0; j <= i; j++) Lm[6 * (3 + i) + 3 + j] = H[9 * i + j];
+        }
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
         {
             double Wa[36], Wb[36];
+            /* Y's upper right 3x3 block is zero, so are Wa's and Wb's (Lm is
+             * lower triangular): left out of the sums (which they do not change) */
             for (j = 0; j < 6; j++)
-                for (i = 0; i < 6; i++) {
+                for (i = j < 3 ? 0 : 3; i < 6; i++) {
                     double xa = YA[6 * i + j], xb = YB[6 * i + j];
-                    for (r = 0; r < i; r++) {
+                    for (r = j < 3 ? 0 : 3; r < i; r++) {
                         xa -= Lm[6 * i + r] * Wa[6 * r + j];
                         xb -= Lm[6 * i + r] * Wb[6 * r + j];
                     }
@@ -494,8 +593,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 }
             for (i = 0; i < 6; i++)
                 for (j = 0; j < 6; j++) {
+                    const int32_t re = i < 3 || j < 3 ? 3 : 6;
                     double sa = 0.0, sb = 0.0;
-                    for (r = 0; r < 6; r++) {
+                    for (r = 0; r < re; r++) {
                         sa += YA[6 * i + r] * Wa[6 * j + r];
                         sb += YB[6 * i + r] * Wb[6 * j + r];
                     }
@@ -505,64 +605,115 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
-    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, M + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
+    /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
+        const double *la;
+        double *m;
         if (i == C->ka) continue;
-        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6, LA + (int64_t)(6 * i + r) * ldA,
-                                       sizeof(double) * (size_t)rA);
+        la = LA + (int64_t)6 * i * ldA;
+        m = X + (int64_t)6 * ci * ncol;
+        for (r = 0; r < 6; r++) {
+            memcpy(m + (int64_t)r * ncol + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
+            memcpy(m + (int64_t)r * ncol + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
+        }
         ci++;
     }
     for (i = 0; i < nB; i++) {
+        const double *lb;
+        double *m;
         if (i == C->kb) continue;
-        for (r = 0; r < 6; r++) memcpy(M + (int64_t)(6 * ci + r) * ncol + 6 + rA, LB + (int64_t)(6 * i + r) * ldB,
-                                       sizeof(double) * (size_t)rB);
+        lb = LB + (int64_t)6 * i * ldB;
+        m = X + (int64_t)6 * ci * ncol;
+        for (r = 0; r < 6; r++) {
+            memcpy(m + (int64_t)r * ncol + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
+            memcpy(m + (int64_t)r * ncol + w + rA - a6, lb + (int64_t)r * ldB + b6,
+                   sizeof(double) * (size_t)(rB - b6));
+        }
         ci++;
     }
     /* The relative acceleration across k (B's minus A's), in k's child frame. */
     xform_cols(&PkbF, Lm, rel, ncol);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
-    for (j = 0; j < rA; j++) {
+    for (j = 0; j < a6; j++) {
         double col[6], o[6];
         for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
         spatial_xform_motion(J, col, o);
         for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
     }
     for (r = 0; r < 6; r++)
-        for (j = 0; j < rB; j++) rel[ncol * r + 6 + rA + j] = LB[(int64_t)(6 * C->kb + r) * ldB + j];
+        memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * C->kb + r) * ldB, sizeof(double) * (size_t)b6);
+    /* Sd = S (S^T S)^-1 */
+    {
+        double StS[36], StSi[36];
+        for (i = 0; i < d; i++)
+            for (j = 0; j < d; j++) {
+                double x = 0.0;
+                for (r = 0; r < 6; r++) x += S[r * d + i] * S[r * d + j];
+                StS[d * i + j] = x;
+            }
+        if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < d; j++) {
+                double x = 0.0;
+                for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
+                Sd[i * d + j] = x;
+            }
+    }
+    /* In place, column by column: the c constraint rows Tc^T L_k, then the d
+     * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
     complement(S, d, Tc);
-    for (q = 0; q < c; q++) {
-        double *row = M + (int64_t)(orows + q) * ncol;
-        for (r = 0; r < 6; r++) {
-            double w = Tc[6 * r + q];
-            if (w == 0.0) continue;
-            for (j = 0; j < ncol; j++) row[j] += w * rel[ncol * r + j];
+    {
+        /* the non-zero weights of each new row (a revolute or prismatic joint's
+         * Tc and Sd are mostly zeros; skipping them changes no sum) */
+        double wt[36];
+        int32_t nz[6], ix[36];
+        for (q = 0; q < 6; q++) {
+            nz[q] = 0;
+            for (r = 0; r < 6; r++) {
+                const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
+                if (x == 0.0) continue;
+                wt[6 * q + nz[q]] = x;
+                ix[6 * q + nz[q]++] = r;
+            }
+        }
+        for (j = 0; j < w; j++) {
+            double col[6];
+            for (r = 0; r < 6; r++) col[r] = rel[ncol * r + j];
+            for (q = 0; q < 6; q++) {
+                double x = 0.0;
+                for (r = 0; r < nz[q]; r++) x += wt[6 * q + r] * col[ix[6 * q + r]];
+                rel[ncol * q + j] = x;
+            }
         }
     }
-    for (q = 0; q < c; q++) reflect_row(M, ncol, 0, rows, orows + q, q, ncol, v);
+    /* (the rows above q are reduced already: zero from column q on) */
+    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v);
     {
         /* b of the outer handles, in C's handle order */
-        double *bo = v + ncol; /* 6 nh doubles after the reflection vector */
+        double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
         const double *bA = t->data + A->bv, *bB = t->data + B->bv;
         for (i = 0, ci = 0; i < nA; i++)
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, S, d, Tc, M, M + (int64_t)orows * ncol, rel, ncol, beta, Q, bo) != 0) return -1;
+        if (joint_coefficients(L, n, Sd, d, Tc, X, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq) != 0)
+            return -1;
     }
-    /* What the outer rows keep right of the c pivots is Lambda_C, compressed
-     * to lower-trapezoidal form (at most 6nh columns). */
     /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
-     * internal dofs), else compressed to lower-trapezoidal form by reflections. */
+     * internal dofs), else compressed to lower-trapezoidal form by reflections:
+     * then handle 0's rows use only the first 6 columns (the parent's join
+     * block, when it is handle 0, for the parent's reflections). */
     rank = ncol - c;
+    C->jw = rank;
     if (rank > orows) {
-        for (i = 0; i < orows; i++) reflect_row(M, ncol, i, orows, i, c + i, ncol, v);
+        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v);
         rank = orows;
+        C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
-    for (r = 0; r < orows; r++) {
-        memcpy(LC + (int64_t)r * orows, M + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
-        for (j = rank; j < orows; j++) LC[(int64_t)r * orows + j] = 0.0;
-    }
+    for (r = 0; r < orows; r++) /* columns rank .. 6nh-1 are never read */
+        memcpy(LC + (int64_t)r * orows, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
     C->rank = rank;
     return 0;
 }

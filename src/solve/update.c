@@ -92,6 +92,7 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     /* the node's blocks inside the pooled coefficients */
     AQS_ASSERT(nd->lam >= 0 && nd->lam + 36 * (int64_t)nd->nh * nd->nh <= L->t.ndata);
     AQS_ASSERT(nd->rank >= 0 && nd->rank <= 6 * nd->nh);
+    AQS_ASSERT(L->t.nodes[nd->a].jw <= L->t.nodes[nd->a].rank && L->t.nodes[nd->b].jw <= L->t.nodes[nd->b].rank);
     AQS_ASSERT(nd->xf >= 0 && nd->xf + 6 * (int64_t)nd->nh <= L->t.ndata);
     AQS_ASSERT(nd->nh <= L->t.max_handles);
     if (dca_node_update(L, n) != 0)
