@@ -885,6 +885,8 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.fallback = L->fb_last;
     full.nodes_predicted = L->s.all ? 0 : L->s.npredicted;
     full.factors_updated = L->t.factors_updated;
+    full.rounding_bound = L->s.rounding;
+    full.certified = L->s.certified;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }

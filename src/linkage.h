@@ -47,6 +47,12 @@ typedef struct {
     int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
+    /* Rounding estimate (src/rounding.c, docs/math.md "The rounding term"),
+     * relative error levels in units of u: rk of the node's reduced factors
+     * (U, E, QX, FX), rkb of its b, rex of its handle forces (set by the
+     * parent's back-substitution); absolute errors (2-norms) of rho and gamma;
+     * resub the largest rho error in the subtree. */
+    double rk, rkb, rerho, regam, resub, rex;
 } node;
 
 typedef struct {
@@ -147,6 +153,11 @@ typedef struct {
     int32_t npred;
     int32_t npredicted;     /* nodes the last solve processed because they were predicted */
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
+    /* Rounding estimate of the last solve (src/rounding.c) */
+    double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
+    double rk_max;          /* largest relative error level met (units of u) */
+    double rounding;        /* aqs_solve_stats.rounding_bound */
+    int certified;          /* aqs_solve_stats.certified */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/aba.c): scratch

@@ -1,0 +1,273 @@
+/* rounding.c -- a running estimate of the DCA's rounding error in the joint
+ * accelerations (docs/math.md, "The rounding term"; issue 12, item 2).
+ *
+ * Model: every quantity the DCA computes carries an absolute error of u times
+ * a relative level kappa times the magnitude of what it is made of. The
+ * levels are carried up the tree by the node update and down by the
+ * back-substitution:
+ *   rk   (factors U, E, QX, FX) max(children) + RND_G0 + the pivot ratio of
+ *        Lc, the square root of the mobility across the joint's constrained
+ *        directions (a near point mass, a light part or a long rigid rod make
+ *        it large);
+ *   rkb  (b) the level of beta = X b^A_k - b^B_k and of the three terms of
+ *        b_C = b_o + X1 E beta + X2 K2^T Sd Q, times the cancellation ratio
+ *        (largest term / result), for beta and for b_C;
+ *   rex  (handle forces) the same for f = gamma + FX x, handed to the children.
+ * The joint acceleration qdd = rho - QX x gets
+ *   e(qdd) = e(rho) + F u max(rk, rex) sum_h |QX_h| |x_h|,
+ *   e(rho) = F u max(rk, rkb(beta)) (|U| |beta| + |G2| |Q|)   (entrywise sums),
+ * F = RND_SAFETY. Cancellation ratios use the terms' actual norms, so they
+ * are ~1 where nothing cancels and levels grow additively with depth; norm
+ * products (which overestimate) enter only the local terms. A first-order
+ * estimate with a safety factor, not a theorem: the hard-case suite checks
+ * it against the quad reference on every family. */
+#include "rounding.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#define RND_G0 8.0
+#define RND_R0 4.0
+
+static double maxd(double a, double b) { return a > b ? a : b; }
+static double n6(const double *v)
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+}
+/* max(1, terms / result): the growth of a relative error through a sum */
+static double ratio(double terms, double result)
+{
+    if (!(terms > 0.0)) return 1.0;
+    if (!(result > 0.0)) return INFINITY;
+    return maxd(1.0, terms / result);
+}
+/* A level k carried through a sum with cancellation ratio r: the sum's own
+ * rounding adds RND_G0 r; the carried error grows by r only where r exceeds
+ * RND_R0 (terms of comparable size that combine are not a cancellation: the
+ * errors of a sum of a few terms do not all add up in the same direction). */
+static double carry(double k, double r) { return k * maxd(1.0, r / RND_R0) + RND_G0 * r; }
+
+static void child_levels(const node *c, double *k, double *kb)
+{
+    if (c->joint >= 0) {
+        *k = c->rk;
+        *kb = c->rkb;
+    } else { /* a leaf: data, and b = I^-1 f rounded a few times */
+        *k = 1.0;
+        *kb = RND_G0;
+    }
+}
+
+void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
+                   const double *Eb, const double *beta, const double *Q, const double *X,
+                   const double *Lc, const double *K, int32_t ncol, const double *bo)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
+    const double *FX = t->data + C->W, *bC = t->data + C->bv, *bB = t->data + B->bv;
+    const double fu = RND_SAFETY * RND_U;
+    double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, kq2 = 0.0, kq, srho = 0.0, sgam = 0.0;
+    double xa[6], hmax = 0.0, hmin = INFINITY;
+    int32_t i, j, k, h;
+    (void)Eb;
+
+    child_levels(A, &kA, &kbA);
+    child_levels(B, &kB, &kbB);
+    if (c > 0) {
+        double pmax = 0.0, pmin = INFINITY;
+        for (i = 0; i < c; i++) {
+            double p = fabs(Lc[(int64_t)i * ncol + i]);
+            pmax = maxd(pmax, p);
+            if (p < pmin) pmin = p;
+        }
+        g += pmin > 0.0 ? pmax / pmin : INFINITY;
+    }
+    /* beta = X b^A_k - b^B_k */
+    bn = n6(beta);
+    for (i = 0; i < 6; i++) xa[i] = beta[i] + bB[6 * C->kb + i];
+    kbeta = carry(maxd(kbA, kbB), ratio(maxd(n6(xa), n6(bB + 6 * C->kb)), bn));
+    /* b_C(h) = b_o(h) + X1E_h beta + X2_h kq with X1 E = -FX^T and
+     * |X2_h kq| <= ||X2_h|| ||kq||, ||kq||^2 = Q^T G2 Q; the handles' rows
+     * of very different norms (heavy and light parts in one factor) */
+    for (i = 0; i < d; i++)
+        for (j = 0; j < d; j++) kq2 += Q[i] * G2[d * i + j] * Q[j];
+    kq = sqrt(kq2 > 0.0 ? kq2 : 0.0);
+    {
+        double kr = 0.0;
+        for (i = 0; i < 6; i++)
+            for (k = 0; k < ncol; k++) kr += K[(int64_t)i * ncol + k] * K[(int64_t)i * ncol + k];
+        if (kr > 0.0) hmax = hmin = kr;
+    }
+    kb = 0.0;
+    for (h = 0; h < C->nh; h++) {
+        double v[6], x2 = 0.0, xr = 0.0, r;
+        for (i = 0; i < 6; i++) {
+            const int32_t o = 6 * h + i;
+            const double *x = X + (int64_t)o * ncol;
+            double s = 0.0;
+            for (j = 0; j < 6; j++) s -= FX[(int64_t)j * orows + o] * beta[j];
+            v[i] = s;
+            for (k = 0; k < c; k++) xr += x[k] * x[k];
+            for (k = c; k < ncol; k++) x2 += x[k] * x[k];
+        }
+        xr += x2;
+        if (xr > 0.0) {
+            hmax = maxd(hmax, xr);
+            if (xr < hmin) hmin = xr;
+        }
+        r = ratio(maxd(maxd(n6(bo + 6 * h), n6(v)), sqrt(x2) * kq), n6(bC + 6 * h));
+        kb = maxd(kb, r);
+    }
+    if (hmax > 0.0) g += sqrt(hmax / hmin);
+    kappa = maxd(kA, kB) + g;
+    kbeta = maxd(kbeta, kappa);
+    kb = carry(maxd(maxd(kbA, kbB), kappa), kb);
+    /* rho = -U beta + G2 Q, gamma = E^T E beta + U^T Q: entrywise sums */
+    for (i = 0; i < d; i++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
+        for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
+        srho += a * a;
+    }
+    for (j = 0; j < 6; j++) {
+        double a = 0.0;
+        for (i = 0; i < 6; i++) {
+            double w = 0.0;
+            for (k = 0; k < c; k++) w += E[6 * k + i] * E[6 * k + j];
+            a += fabs(w * beta[i]);
+        }
+        for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+        sgam += a * a;
+    }
+    C->rerho = fu * kbeta * sqrt(srho);
+    C->regam = fu * kbeta * sqrt(sgam);
+    C->rk = kappa;
+    C->rkb = kb;
+    {
+        double sub = C->rerho;
+        if (A->joint >= 0) sub = maxd(sub, A->resub);
+        if (B->joint >= 0) sub = maxd(sub, B->resub);
+        C->resub = sub;
+    }
+}
+
+void rounding_solve_start(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    s->rc_sq = s->rc_max = s->rk_max = 0.0;
+    if (L->t.nnodes > 0) L->t.nodes[L->t.root].rex = 0.0;
+}
+
+/* The estimated error (2-norm) of node n's joint acceleration from its
+ * handle forces; with set, also the children's handle-force levels. */
+static double joint_error(aqs_linkage *L, int32_t n, int set)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
+    const int32_t d = C->d, rows = 6 * C->nh;
+    const double fu = RND_SAFETY * RND_U, kx = maxd(C->rk, C->rex);
+    double sq = 0.0;
+    int32_t h, i, k;
+    /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes */
+    for (i = 0; i < d; i++) {
+        const double *qr = QX + (int64_t)i * rows;
+        double a = 0.0;
+        for (k = 0; k < rows; k++) a += fabs(qr[k] * x[k]);
+        sq += a * a;
+    }
+    if (set) {
+        /* f = gamma + FX x: its level, times the cancellation ratio (the
+         * largest handle's share against f) */
+        node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+        const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
+        const double fn = n6(f);
+        double fmax = n6(t->data + C->gamma), kf;
+        for (h = 0; h < C->nh; h++) {
+            const int32_t o = 6 * h;
+            double v[6];
+            for (i = 0; i < 6; i++) {
+                const double *fr = FX + (int64_t)i * rows + o;
+                v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
+                       fr[5] * x[o + 5];
+            }
+            fmax = maxd(fmax, n6(v));
+        }
+        kf = maxd(kx, C->regam / fu / (fn > 0.0 ? fn : INFINITY));
+        kf = maxd(kf, carry(kx, ratio(fmax, fn)));
+        A->rex = maxd(C->rex, kf);
+        B->rex = maxd(C->rex, kf);
+    }
+    return C->rerho + fu * kx * sqrt(sq);
+}
+
+void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
+{
+    solve_state *s = &L->s;
+    double e = joint_error(L, n, 1);
+    s->rk_max = maxd(s->rk_max, L->t.nodes[n].rk);
+    if (counted) {
+        s->rc_sq += e * e;
+        s->rc_max = maxd(s->rc_max, e);
+    }
+}
+
+void rounding_finish(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    tree *t = &L->t;
+    double ru_sq = 0.0, ru_max = 0.0, kmax = s->rk_max, r2, rmax, tabs, den, tot, T, top = 0.0;
+    int valid = L->dca_form != AQS_DCA_FORM_PHI;
+    int32_t i;
+    if (t->nnodes == 0) {
+        s->rounding = 0.0;
+        s->certified = 1;
+        return;
+    }
+    if (!s->all)
+        for (i = 0; i < s->heap_size; i++) {
+            int32_t n = s->heap_item[i];
+            const node *nd = &t->nodes[n];
+            /* its own joint from its handle forces, or any rho below it */
+            double e = maxd(joint_error(L, n, 0), nd->resub);
+            ru_sq += (double)nd->ncount * e * e;
+            ru_max = maxd(ru_max, e);
+            top = maxd(top, s->heap_key[i]);
+            kmax = maxd(kmax, nd->rk);
+        }
+    r2 = sqrt(s->rc_sq + ru_sq);
+    rmax = maxd(s->rc_max, ru_max);
+    T = s->all ? 0.0 : s->bound;
+    switch (s->metric) {
+    case AQS_METRIC_ABS_LINKAGE: tot = T + r2; break;
+    case AQS_METRIC_ABS_JOINT: tot = T + rmax; break;
+    case AQS_METRIC_REL_LINKAGE:
+        /* ||ref_all|| >= sqrt(A(root)) - r2 */
+        tabs = s->all ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);
+        den = s->all ? s->comp_sq : (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
+        den = sqrt(den > 0.0 ? den : 0.0);
+        if (tabs + r2 == 0.0) tot = T;
+        else if (den > r2) tot = maxd(T, (tabs + r2) / (den - r2));
+        else tot = INFINITY;
+        break;
+    default: /* REL_JOINT: sqrt(top) / L, max_j ||ref_j|| >= L - rmax */
+        tabs = s->all ? 0.0 : sqrt(maxd(s->joint_bound == AQS_JOINT_BOUND_SUM ? s->sum : top, 0.0));
+        den = s->lower;
+        if (tabs + rmax == 0.0) tot = T;
+        else if (den > rmax) tot = maxd(T, (tabs + rmax) / (den - rmax));
+        else tot = INFINITY;
+        break;
+    }
+    if (!(kmax * RND_SAFETY * RND_U <= RND_KAPPA_MAX) || !isfinite(tot)) valid = 0;
+    s->rounding = valid ? maxd(tot - T, 0.0) : INFINITY;
+    s->certified = valid && (s->eps == 0.0 || s->rounding <= s->eps);
+}
+
+void rounding_none(aqs_linkage *L)
+{
+    L->s.rounding = INFINITY;
+    L->s.certified = 0;
+}
