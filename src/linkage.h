@@ -49,10 +49,10 @@ typedef struct {
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
     /* Rounding estimate (src/rounding.c, docs/math.md "The rounding term"),
      * relative error levels in units of u: rk of the node's reduced factors
-     * (U, E, QX, FX), rkb of its b, rex of its handle forces (set by the
-     * parent's back-substitution); absolute errors (2-norms) of rho and gamma;
-     * resub the largest rho error in the subtree. */
-    double rk, rkb, rerho, regam, resub, rex;
+     * (U, E, QX, FX), rkb of its b; absolute errors (2-norms) of rho and
+     * gamma; resub the largest rho error in the subtree. (The handle forces'
+     * errors are per handle: tree.rnd_x.) */
+    double rk, rkb, rerho, regam, resub;
 } node;
 
 typedef struct {
@@ -89,6 +89,8 @@ typedef struct {
     int all_dirty;
     int32_t nodes_updated; /* by the last update */
     int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
+    double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
+                          of its handle forces (src/rounding.c), set by the back-substitution */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -156,6 +158,7 @@ typedef struct {
     /* Rounding estimate of the last solve (src/rounding.c) */
     double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
     double rk_max;          /* largest relative error level met (units of u) */
+    int rnd_ok;             /* the estimate's storage exists (src/rounding.c) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
     int certified;          /* aqs_solve_stats.certified */
 } solve_state;

@@ -1,34 +1,38 @@
 /* rounding.c -- a running estimate of the DCA's rounding error in the joint
  * accelerations (docs/math.md, "The rounding term"; issue 12, item 2).
  *
- * Model: every quantity the DCA computes carries an absolute error of u times
- * a relative level kappa times the magnitude of what it is made of. The
- * levels are carried up the tree by the node update and down by the
- * back-substitution:
- *   rk   (factors U, E, QX, FX) max(children) + RND_G0 + the pivot ratio of
- *        Lc, the square root of the mobility across the joint's constrained
- *        directions (a near point mass, a light part or a long rigid rod make
- *        it large);
- *   rkb  (b) the level of beta = X b^A_k - b^B_k and of the three terms of
- *        b_C = b_o + X1 E beta + X2 K2^T Sd Q, times the cancellation ratio
- *        (largest term / result), for beta and for b_C;
- *   rex  (handle forces) the same for f = gamma + FX x, handed to the children.
- * The joint acceleration qdd = rho - QX x gets
- *   e(qdd) = e(rho) + F u max(rk, rex) sum_h |QX_h| |x_h|,
- *   e(rho) = F u max(rk, rkb(beta)) (|U| |beta| + |G2| |Q|)   (entrywise sums),
- * F = RND_SAFETY. Cancellation ratios use the terms' actual norms, so they
- * are ~1 where nothing cancels and levels grow additively with depth; norm
- * products (which overestimate) enter only the local terms. A first-order
- * estimate with a safety factor, not a theorem: the hard-case suite checks
- * it against the quad reference on every family. */
+ * Model: a quantity the DCA computes as a sum carries an error of u times a
+ * relative level times the magnitude of its terms. Levels go up the tree with
+ * the node update (per node, in node.rk/rkb/rerho/regam/resub):
+ *   rk   of the reduced factors (U, E, QX, FX): max over the children +
+ *        RND_G0 + the pivot ratio of Lc (the square root of the mobility
+ *        across the joint's constrained directions: a near point mass or a
+ *        tiny base makes it large) + the ratio of the largest to the smallest
+ *        row-block norm of the stacked factor (heavy and light handles in one
+ *        node);
+ *   rkb  of b: carried through beta = X b^A_k - b^B_k and through
+ *        b_C = b_o + X1 E beta + X2 K2^T Sd Q with their cancellation ratios
+ *        (largest term / result, from the terms' actual norms);
+ *   rerho, regam: absolute errors of rho = -U beta + G2 Q and
+ *        gamma = W beta + U^T Q, F u max(rk, level of beta) times their
+ *        entrywise product sums.
+ * The back-substitution goes down with absolute errors of the handle forces
+ * (per handle, tree.rnd_x): f = gamma + FX x gets e(gamma), each handle's
+ * relative error times its share |FX_h x_h|, and F u rk (|gamma| + sum |FX_h
+ * x_h|); the child's handle k inherits f's error, the others keep theirs. The
+ * joint's acceleration qdd = rho - QX x then has
+ *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|,
+ * F = RND_SAFETY. A carried level grows by a cancellation ratio r only past
+ * RND_R0 (terms of similar size that combine do not all err the same way);
+ * the sum's own rounding adds RND_G0 r. A first-order estimate with a safety
+ * factor, not a theorem: tests/reference/hardcases.cpp checks it against the
+ * quad reference on every family at every eps 2^-1 .. 2^-30. */
 #include "rounding.h"
 
 #include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
 
-#define RND_G0 8.0
-#define RND_R0 4.0
+#define RND_G0 2.0
+#define RND_R0 8.0
 
 static double maxd(double a, double b) { return a > b ? a : b; }
 static double n6(const double *v)
@@ -157,51 +161,84 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
 void rounding_solve_start(aqs_linkage *L)
 {
     solve_state *s = &L->s;
+    tree *t = &L->t;
     s->rc_sq = s->rc_max = s->rk_max = 0.0;
-    if (L->t.nnodes > 0) L->t.nodes[L->t.root].rex = 0.0;
+    s->rnd_ok = 1;
+    if (!t->rnd_x && t->nhandles > 0) {
+        t->rnd_x = lk_calloc(L, (size_t)t->nhandles, sizeof(double));
+        if (!t->rnd_x) s->rnd_ok = 0; /* no estimate: the solve is not certified */
+    }
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
- * handle forces; with set, also the children's handle-force levels. */
+ * handle forces; with set, also the children's handle-force errors. */
 static double joint_error(aqs_linkage *L, int32_t n, int set)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
-    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
+    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U, *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
-    const double fu = RND_SAFETY * RND_U, kx = maxd(C->rk, C->rex);
-    double sq = 0.0;
+    const double fu = RND_SAFETY * RND_U, ku = fu * C->rk;
+    double sq = 0.0, qe = 0.0;
     int32_t h, i, k;
-    /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes */
+    /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
+     * QX's error), and each handle force's error through |QX_h| */
     for (i = 0; i < d; i++) {
         const double *qr = QX + (int64_t)i * rows;
         double a = 0.0;
         for (k = 0; k < rows; k++) a += fabs(qr[k] * x[k]);
         sq += a * a;
     }
+    for (h = 0; h < C->nh; h++) {
+        /* handle h's relative error carried by its share QX_h x_h */
+        const double xn = n6(x + 6 * h);
+        double q = 0.0;
+        if (!(ex[h] > 0.0) || xn == 0.0) continue;
+        for (i = 0; i < d; i++) {
+            const double *qr = QX + (int64_t)i * rows + 6 * h, *xh = x + 6 * h;
+            const double v = qr[0] * xh[0] + qr[1] * xh[1] + qr[2] * xh[2] + qr[3] * xh[3] + qr[4] * xh[4] + qr[5] * xh[5];
+            q += v * v;
+        }
+        qe += ex[h] / xn * sqrt(q);
+    }
     if (set) {
-        /* f = gamma + FX x: its level, times the cancellation ratio (the
-         * largest handle's share against f) */
+        /* f = gamma + FX x: each handle force's relative error carried by its
+         * share FX_h x_h, plus the rounding; the children's handle k gets f
+         * (its relative error kept through the transform), the others keep
+         * theirs (the order of dca_node_backsub) */
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
         const double fn = n6(f);
-        double fmax = n6(t->data + C->gamma), kf;
+        double ef = C->regam, sf = n6(t->data + C->gamma), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
+        int32_t ci;
         for (h = 0; h < C->nh; h++) {
             const int32_t o = 6 * h;
-            double v[6];
+            const double xn = n6(x + o);
+            double v[6], vn;
+            if (xn == 0.0) continue;
             for (i = 0; i < 6; i++) {
                 const double *fr = FX + (int64_t)i * rows + o;
                 v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
                        fr[5] * x[o + 5];
             }
-            fmax = maxd(fmax, n6(v));
+            vn = n6(v);
+            ef += ex[h] / xn * vn;
+            sf += vn;
         }
-        kf = maxd(kx, C->regam / fu / (fn > 0.0 ? fn : INFINITY));
-        kf = maxd(kf, carry(kx, ratio(fmax, fn)));
-        A->rex = maxd(C->rex, kf);
-        B->rex = maxd(C->rex, kf);
+        ef += ku * sf;
+        for (i = 0, ci = 0; i < A->nh; i++) {
+            if (i == C->ka) {
+                const double xk = n6(t->data + A->xf + 6 * i);
+                exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
+            } else
+                exA[i] = ex[ci++];
+        }
+        for (i = 0; i < B->nh; i++) {
+            if (i == C->kb) exB[i] = ef;
+            else exB[i] = ex[ci++];
+        }
     }
-    return C->rerho + fu * kx * sqrt(sq);
+    return C->rerho + qe + ku * sqrt(sq);
 }
 
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
@@ -220,7 +257,7 @@ void rounding_finish(aqs_linkage *L)
     solve_state *s = &L->s;
     tree *t = &L->t;
     double ru_sq = 0.0, ru_max = 0.0, kmax = s->rk_max, r2, rmax, tabs, den, tot, T, top = 0.0;
-    int valid = L->dca_form != AQS_DCA_FORM_PHI;
+    int valid = L->dca_form != AQS_DCA_FORM_PHI && s->rnd_ok;
     int32_t i;
     if (t->nnodes == 0) {
         s->rounding = 0.0;
@@ -246,7 +283,7 @@ void rounding_finish(aqs_linkage *L)
     case AQS_METRIC_ABS_JOINT: tot = T + rmax; break;
     case AQS_METRIC_REL_LINKAGE:
         /* ||ref_all|| >= sqrt(A(root)) - r2 */
-        tabs = s->all ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);
+        tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);
         den = s->all ? s->comp_sq : (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
         den = sqrt(den > 0.0 ? den : 0.0);
         if (tabs + r2 == 0.0) tot = T;
@@ -254,7 +291,7 @@ void rounding_finish(aqs_linkage *L)
         else tot = INFINITY;
         break;
     default: /* REL_JOINT: sqrt(top) / L, max_j ||ref_j|| >= L - rmax */
-        tabs = s->all ? 0.0 : sqrt(maxd(s->joint_bound == AQS_JOINT_BOUND_SUM ? s->sum : top, 0.0));
+        tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(maxd(s->joint_bound == AQS_JOINT_BOUND_SUM ? s->sum : top, 0.0));
         den = s->lower;
         if (tabs + rmax == 0.0) tot = T;
         else if (den > rmax) tot = maxd(T, (tabs + rmax) / (den - rmax));

@@ -10,7 +10,7 @@
 /* Unit roundoff of double (2^-53) and the safety factor on every local
  * rounding term. */
 #define RND_U 1.1102230246251565e-16
-#define RND_SAFETY 16.0
+#define RND_SAFETY 8.0
 /* Past this relative error level (kappa u) the first-order estimate itself is
  * not trusted: the solve is not certified. */
 #define RND_KAPPA_MAX 1e-3

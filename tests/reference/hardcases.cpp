@@ -651,9 +651,13 @@ struct BoundTally {
     int solves = 0, uncertified = 0, false_bounds = 0, exact = 0, exact_uncertified = 0;
     std::vector<double> tight;
 };
-// Families whose every solve must be certified at every eps >= 2^-30 (benign: the DCA's
-// rounding is ~1e-15 there, far below 2^-30): the README's chain and random trees.
+// Families whose solves must be certified at every eps >= 2^-30 the truth allows (benign: the
+// DCA's rounding is 1e-16 .. 1e-14 relative there): the README's chain and random trees. "The
+// truth allows": eps >= kBenignSlack x the exact DCA's true error in that measure, i.e. the
+// estimate may be at most kBenignSlack times the true error there (measured: 2 .. 60 on the
+// chains, 2e3 .. 3e3 on the trees, docs/hardcases.md).
 bool benign_family(const std::string &f) { return f == "chain" || f == "tree"; }
+const double kBenignSlack = 3e4;
 const int kBoundExpMax = 30;  // eps = 2^-1 .. 2^-30, every exponent
 std::map<std::string, BoundTally> g_bound;
 
@@ -947,6 +951,7 @@ int main(int argc, char **argv) {
         // families certified must be 1 (else the check could pass trivially).
         for (int metric = 0; metric < 4 && md.nv <= 100000 && !long_mode; ++metric) {
             BoundTally &bt = g_bound[sp.family];
+            double dca_true = NAN;  // the exact DCA's true error in this measure (e = 0, first)
             for (int e = 0; e <= kBoundExpMax; ++e) {
                 const double eps = e == 0 ? 0.0 : std::ldexp(1.0, -e);
                 if (e == 0) aqs_linkage_set_exact_solver(c.l, AQS_EXACT_DCA);
@@ -961,6 +966,7 @@ int main(int argc, char **argv) {
                 aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
                 for (size_t j = 0; j < md.joints.size(); ++j) aqs_joint_get_computed(c.l, (int32_t)j, &computed[j]);
                 const double tru = measure(metric, qdd, ref, js, computed, true);
+                if (e == 0) dca_true = tru;
                 const double total = stats.error_bound + stats.rounding_bound;
                 const bool holds = tru <= total * (1 + 1e-9);
                 ++(e == 0 ? bt.exact : bt.solves);
@@ -973,7 +979,8 @@ int main(int argc, char **argv) {
                                          " rounding_bound " + fmt("%.2e", stats.rounding_bound) + " certified " +
                                          std::to_string(stats.certified);
                 verdict(!stats.certified || holds, false, what + " (bound below the truth)");
-                if (benign_family(sp.family)) verdict(stats.certified == 1, false, what + " (benign: not certified)");
+                if (benign_family(sp.family) && (e == 0 || eps >= kBenignSlack * dca_true))
+                    verdict(stats.certified == 1, false, what + " (benign: not certified)");
                 if (json)
                     std::fprintf(json,
                                  "{\"case\":%s,\"family\":%s,\"solver\":\"bound\",\"metric\":%s,\"eps\":%s,"
