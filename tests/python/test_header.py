@@ -127,9 +127,10 @@ def test_structs_match(header):
         fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
         mirror = STRUCTS[tag]
         assert [(n, FIELD_TYPES[t]) for t, n in fields] == list(mirror._fields_), tag
-    # The C layout with natural alignment: no padding, 56 bytes.
+    # The C layout with natural alignment: 68 bytes of fields, padded to 72.
     stats = _lib.aqs_solve_stats
-    assert ctypes.sizeof(stats) == 56
+    assert ctypes.sizeof(stats) == 72
     assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
     assert stats.fallback.offset == 44 and stats.factors_updated.offset == 52
+    assert stats.rounding_bound.offset == 56 and stats.certified.offset == 64
     assert ctypes.sizeof(_lib.aqs_collision_stats) == 32  # eight 4-byte fields

@@ -168,6 +168,15 @@ class SolveStats:
         their total acceleration (set_prediction).
     factors_updated: total-acceleration factors recomputed, counted as
         nodes_updated (the prediction skips some).
+    rounding_bound: an estimate with a safety factor of what the
+        divide-and-conquer solver's rounding adds to the measure, same unit as
+        eps: against the true solution, the measure is at most error_bound +
+        rounding_bound when certified. inf when no bound can be given.
+    certified: True if error_bound + rounding_bound bounds the measure against
+        the true solution and rounding_bound <= eps (eps > 0); False where no
+        honest bound can be given: the rounding exceeds eps, a near-singular
+        pivot, the "phi" DCA form, or an exact solve by the articulated-body
+        algorithm (which does not estimate its rounding).
     """
 
     metric: str
@@ -181,6 +190,8 @@ class SolveStats:
     fallback: bool = False
     nodes_predicted: int = 0
     factors_updated: int = 0
+    rounding_bound: float = 0.0
+    certified: bool = False
 
     @classmethod
     def _from_c(cls, c):
@@ -189,7 +200,8 @@ class SolveStats:
                    counted_joints=int(c.counted_joints), nodes_updated=int(c.nodes_updated),
                    nodes_processed=int(c.nodes_processed), capped=bool(c.capped),
                    fallback=bool(c.fallback), nodes_predicted=int(c.nodes_predicted),
-                   factors_updated=int(c.factors_updated))
+                   factors_updated=int(c.factors_updated), rounding_bound=float(c.rounding_bound),
+                   certified=bool(c.certified))
 
 
 def version():

@@ -180,6 +180,8 @@ class aqs_solve_stats(ctypes.Structure):
         ("fallback", ctypes.c_int32),         # 1 if exact because of the exact fallback
         ("nodes_predicted", ctypes.c_int32),  # processed without evaluating A (prediction)
         ("factors_updated", ctypes.c_int32),  # total-acceleration factors recomputed
+        ("rounding_bound", ctypes.c_double),  # estimate of what the DCA's rounding adds (inf: none)
+        ("certified", ctypes.c_int32),        # 1: error_bound + rounding_bound is a bound, <= eps
     ]
 
 
