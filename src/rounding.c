@@ -73,8 +73,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
     const double *FX = t->data + C->W, *bC = t->data + C->bv, *bB = t->data + B->bv;
     const double fu = RND_SAFETY * RND_U;
-    double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, kq2 = 0.0, kq, srho = 0.0, sgam = 0.0;
-    double xa[6], hmax = 0.0, hmin = INFINITY;
+    double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
     (void)Eb;
 
@@ -93,56 +92,59 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     bn = n6(beta);
     for (i = 0; i < 6; i++) xa[i] = beta[i] + bB[6 * C->kb + i];
     kbeta = carry(maxd(kbA, kbB), ratio(maxd(n6(xa), n6(bB + 6 * C->kb)), bn));
-    /* b_C(h) = b_o(h) + X1E_h beta + X2_h kq with X1 E = -FX^T and
-     * |X2_h kq| <= ||X2_h|| ||kq||, ||kq||^2 = Q^T G2 Q; the handles' rows
-     * of very different norms (heavy and light parts in one factor) */
-    for (i = 0; i < d; i++)
-        for (j = 0; j < d; j++) kq2 += Q[i] * G2[d * i + j] * Q[j];
-    kq = sqrt(kq2 > 0.0 ? kq2 : 0.0);
-    {
-        double kr = 0.0;
-        for (i = 0; i < 6; i++)
-            for (k = 0; k < ncol; k++) kr += K[(int64_t)i * ncol + k] * K[(int64_t)i * ncol + k];
-        if (kr > 0.0) hmax = hmin = kr;
-    }
-    kb = 0.0;
+    /* b_C(h) = b_o(h) + X1E_h beta + X2_h K2^T Sd Q with X1 E = -FX^T: the
+     * three terms' norms (the last as b_C - b_o - X1E_h beta) */
+    kb = 1.0;
     for (h = 0; h < C->nh; h++) {
-        double v[6], x2 = 0.0, xr = 0.0, r;
+        const double *bch = bC + 6 * h, *boh = bo + 6 * h;
+        double v[6], w[6];
         for (i = 0; i < 6; i++) {
             const int32_t o = 6 * h + i;
-            const double *x = X + (int64_t)o * ncol;
-            double s = 0.0;
-            for (j = 0; j < 6; j++) s -= FX[(int64_t)j * orows + o] * beta[j];
-            v[i] = s;
-            for (k = 0; k < c; k++) xr += x[k] * x[k];
-            for (k = c; k < ncol; k++) x2 += x[k] * x[k];
+            const double *fx = FX + o;
+            v[i] = -(fx[0] * beta[0] + fx[orows] * beta[1] + fx[2 * orows] * beta[2] + fx[3 * orows] * beta[3] +
+                     fx[4 * orows] * beta[4] + fx[5 * orows] * beta[5]);
+            w[i] = bch[i] - boh[i] - v[i];
         }
-        xr += x2;
-        if (xr > 0.0) {
-            hmax = maxd(hmax, xr);
-            if (xr < hmin) hmin = xr;
-        }
-        r = ratio(maxd(maxd(n6(bo + 6 * h), n6(v)), sqrt(x2) * kq), n6(bC + 6 * h));
-        kb = maxd(kb, r);
+        kb = maxd(kb, ratio(maxd(maxd(n6(boh), n6(v)), n6(w)), n6(bch)));
     }
-    if (hmax > 0.0) g += sqrt(hmax / hmin);
+    /* heavy and light handles in one node: the ratio of the largest to the
+     * smallest row-block norm of the stacked factor (outer handles and k),
+     * row norms being what the reflections keep */
+    {
+        const int64_t nx = (int64_t)orows * ncol;
+        double hmax = 0.0, hmin = INFINITY, r2 = 0.0;
+        int64_t e;
+        for (e = 0; e < 6 * (int64_t)ncol; e++) r2 += K[e] * K[e];
+        if (r2 > 0.0) hmax = hmin = r2;
+        for (h = 0; h < C->nh; h++) {
+            const double *x = X + (int64_t)6 * h * ncol;
+            r2 = 0.0;
+            for (e = 0; e < 6 * (int64_t)ncol && e < nx; e++) r2 += x[e] * x[e];
+            if (r2 > 0.0) {
+                hmax = maxd(hmax, r2);
+                if (r2 < hmin) hmin = r2;
+            }
+        }
+        if (hmax > 0.0) g += sqrt(hmax / hmin);
+    }
     kappa = maxd(kA, kB) + g;
     kbeta = maxd(kbeta, kappa);
     kb = carry(maxd(maxd(kbA, kbB), kappa), kb);
-    /* rho = -U beta + G2 Q, gamma = E^T E beta + U^T Q: entrywise sums */
+    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
     for (i = 0; i < d; i++) {
         double a = 0.0;
         for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
         for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
         srho += a * a;
     }
+    for (k = 0; k < c; k++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
+        eb[k] = a;
+    }
     for (j = 0; j < 6; j++) {
         double a = 0.0;
-        for (i = 0; i < 6; i++) {
-            double w = 0.0;
-            for (k = 0; k < c; k++) w += E[6 * k + i] * E[6 * k + j];
-            a += fabs(w * beta[i]);
-        }
+        for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
         for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
         sgam += a * a;
     }
@@ -182,24 +184,26 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     double sq = 0.0, qe = 0.0;
     int32_t h, i, k;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
-     * QX's error), and each handle force's error through |QX_h| */
-    for (i = 0; i < d; i++) {
-        const double *qr = QX + (int64_t)i * rows;
-        double a = 0.0;
-        for (k = 0; k < rows; k++) a += fabs(qr[k] * x[k]);
-        sq += a * a;
-    }
-    for (h = 0; h < C->nh; h++) {
-        /* handle h's relative error carried by its share QX_h x_h */
-        const double xn = n6(x + 6 * h);
-        double q = 0.0;
-        if (!(ex[h] > 0.0) || xn == 0.0) continue;
-        for (i = 0; i < d; i++) {
-            const double *qr = QX + (int64_t)i * rows + 6 * h, *xh = x + 6 * h;
-            const double v = qr[0] * xh[0] + qr[1] * xh[1] + qr[2] * xh[2] + qr[3] * xh[3] + qr[4] * xh[4] + qr[5] * xh[5];
-            q += v * v;
+     * QX's error), and each handle's relative error carried by its share
+     * QX_h x_h */
+    {
+        double a[6] = {0, 0, 0, 0, 0, 0}, q[6];
+        for (h = 0; h < C->nh; h++) {
+            const double *xh = x + 6 * h;
+            const double xn = n6(xh), w = xn > 0.0 ? ex[h] / xn : 0.0;
+            double qq = 0.0;
+            for (i = 0; i < d; i++) {
+                const double *qr = QX + (int64_t)i * rows + 6 * h;
+                const double p0 = qr[0] * xh[0], p1 = qr[1] * xh[1], p2 = qr[2] * xh[2], p3 = qr[3] * xh[3],
+                             p4 = qr[4] * xh[4], p5 = qr[5] * xh[5];
+                a[i] += fabs(p0) + fabs(p1) + fabs(p2) + fabs(p3) + fabs(p4) + fabs(p5);
+                q[i] = p0 + p1 + p2 + p3 + p4 + p5;
+                qq += q[i] * q[i];
+            }
+            qe += w * sqrt(qq);
         }
-        qe += ex[h] / xn * sqrt(q);
+        for (i = 0; i < d; i++) sq += a[i] * a[i];
+        (void)k;
     }
     if (set) {
         /* f = gamma + FX x: each handle force's relative error carried by its
