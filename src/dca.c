@@ -387,7 +387,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *S, int32_
         w[i] = x;
     }
     memcpy(gamma, w, sizeof w);
-    rounding_node(L, n, U, G2, E, Eb, beta, Q, X, Lc, K, ncol, bo);
+    rounding_node(L, n, U, G2, E, beta, Q, Lc, ncol, bo);
     return 0;
 }
 

@@ -7,9 +7,9 @@
  *   rk   of the reduced factors (U, E, QX, FX): max over the children +
  *        RND_G0 + the pivot ratio of Lc (the square root of the mobility
  *        across the joint's constrained directions: a near point mass or a
- *        tiny base makes it large) + the ratio of the largest to the smallest
- *        row-block norm of the stacked factor (heavy and light handles in one
- *        node);
+ *        tiny base makes it large) + the square root of the children's mass
+ *        ratio (heavy and light parts in one factor: their rows' norms go
+ *        like 1/sqrt(mass), docs/math.md 4a);
  *   rkb  of b: carried through beta = X b^A_k - b^B_k and through
  *        b_C = b_o + X1 E beta + X2 K2^T Sd Q with their cancellation ratios
  *        (largest term / result, from the terms' actual norms);
@@ -64,8 +64,7 @@ static void child_levels(const node *c, double *k, double *kb)
 }
 
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
-                   const double *Eb, const double *beta, const double *Q, const double *X,
-                   const double *Lc, const double *K, int32_t ncol, const double *bo)
+                   const double *beta, const double *Q, const double *Lc, int32_t ncol, const double *bo)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
@@ -75,7 +74,6 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     const double fu = RND_SAFETY * RND_U;
     double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
-    (void)Eb;
 
     child_levels(A, &kA, &kbA);
     child_levels(B, &kB, &kbB);
@@ -107,25 +105,11 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         }
         kb = maxd(kb, ratio(maxd(maxd(n6(boh), n6(v)), n6(w)), n6(bch)));
     }
-    /* heavy and light handles in one node: the ratio of the largest to the
-     * smallest row-block norm of the stacked factor (outer handles and k),
-     * row norms being what the reflections keep */
+    /* heavy and light parts in one node: the square root of the children's
+     * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
     {
-        const int64_t nx = (int64_t)orows * ncol;
-        double hmax = 0.0, hmin = INFINITY, r2 = 0.0;
-        int64_t e;
-        for (e = 0; e < 6 * (int64_t)ncol; e++) r2 += K[e] * K[e];
-        if (r2 > 0.0) hmax = hmin = r2;
-        for (h = 0; h < C->nh; h++) {
-            const double *x = X + (int64_t)6 * h * ncol;
-            r2 = 0.0;
-            for (e = 0; e < 6 * (int64_t)ncol && e < nx; e++) r2 += x[e] * x[e];
-            if (r2 > 0.0) {
-                hmax = maxd(hmax, r2);
-                if (r2 < hmin) hmin = r2;
-            }
-        }
-        if (hmax > 0.0) g += sqrt(hmax / hmin);
+        const double mA = t->data[A->ic], mB = t->data[B->ic];
+        if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
     }
     kappa = maxd(kA, kB) + g;
     kbeta = maxd(kbeta, kappa);

@@ -16,14 +16,12 @@
 #define RND_KAPPA_MAX 1e-3
 
 /* Node n (square-root form), at the end of its coefficients: U (d x 6), G2 =
- * Sd^T K2 K2^T Sd (d x d), E = Lc^-1 Tc^T (c x 6), Eb = E beta, beta, the
- * joint force Q, the reflected stacked rows X (outer rows, ncol columns; the
- * first c are X1), their constraint rows Lc (c x c pivots), the reflected
- * rows of the relative acceleration across k (K, 6 x ncol), and the outer
- * handles' b. Sets n's rk, reb, rerho, regam, resub. */
+ * Sd^T K2 K2^T Sd (d x d), E = Lc^-1 Tc^T (c x 6), beta, the joint force Q,
+ * the constraint rows' factor Lc (its c pivots, row stride ncol) and the
+ * outer handles' b. Reads the node's FX, b and mass properties and its
+ * children's levels; sets n's rk, rkb, rerho, regam, resub. */
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
-                   const double *Eb, const double *beta, const double *Q, const double *X,
-                   const double *Lc, const double *K, int32_t ncol, const double *bo);
+                   const double *beta, const double *Q, const double *Lc, int32_t ncol, const double *bo);
 /* Before a solve's back-substitution: the root's handle forces are exact,
  * the per-solve sums zero. */
 void rounding_solve_start(aqs_linkage *L);
