@@ -23,6 +23,8 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     tree *t = &L->t;
     int32_t n;
     if (t->data) return AQS_OK;
+    if (!t->rnd_x && !(t->rnd_x = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double)))) /* src/rounding.c */
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,

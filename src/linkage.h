@@ -90,7 +90,8 @@ typedef struct {
     int32_t nodes_updated; /* by the last update */
     int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
-                          of its handle forces (src/rounding.c), set by the back-substitution */
+                          of its handle forces (src/rounding.c), set by the back-substitution;
+                          allocated by dca_enable */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -158,7 +159,7 @@ typedef struct {
     /* Rounding estimate of the last solve (src/rounding.c) */
     double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
     double rk_max;          /* largest relative error level met (units of u) */
-    int rnd_ok;             /* the estimate's storage exists (src/rounding.c) */
+    int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
     int certified;          /* aqs_solve_stats.certified */
 } solve_state;

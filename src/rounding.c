@@ -149,11 +149,7 @@ void rounding_solve_start(aqs_linkage *L)
     solve_state *s = &L->s;
     tree *t = &L->t;
     s->rc_sq = s->rc_max = s->rk_max = 0.0;
-    s->rnd_ok = 1;
-    if (!t->rnd_x && t->nhandles > 0) {
-        t->rnd_x = lk_calloc(L, (size_t)t->nhandles, sizeof(double));
-        if (!t->rnd_x) s->rnd_ok = 0; /* no estimate: the solve is not certified */
-    }
+    s->rnd_ok = t->rnd_x != NULL; /* allocated by dca_enable with the coefficients */
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
