@@ -655,8 +655,8 @@ struct BoundTally {
 // Families whose solves must be certified at every eps >= 2^-30 the truth allows (benign: the
 // DCA's rounding is 1e-16 .. 1e-14 relative there): the README's chain and random trees. "The
 // truth allows": eps >= kBenignSlack x the exact DCA's true error in that measure, i.e. the
-// estimate may be at most kBenignSlack times the true error there (measured: 2 .. 60 on the
-// chains, 2e3 .. 3e3 on the trees, docs/hardcases.md).
+// estimate may be at most kBenignSlack times the true error there (measured on the exact DCA:
+// 4 .. 150 on the chains, 4e3 .. 2e4 on the trees, docs/hardcases.md).
 bool benign_family(const std::string &f) { return f == "chain" || f == "tree"; }
 const double kBenignSlack = 3e4;
 const int kBoundExpMax = 30;  // eps = 2^-1 .. 2^-30, every exponent
