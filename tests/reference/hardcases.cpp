@@ -23,6 +23,11 @@
 // Also printed: "skip", the measure over the uncomputed joints alone against the reference
 // (what the bound claims in exact arithmetic).
 //
+// Bound truth (issue 12, item 2; quick mode): every case, every eps = 2^-1 .. 2^-30 and the
+// exact DCA, four measures: certified == 0 or true <= error_bound + rounding_bound; on the
+// benign families certified == 1 wherever the truth allows (kBenignSlack). A per-family
+// summary (not certified, false bounds, tightness) ends the output.
+//
 // Assertions (quick mode): the thresholds table below. Cases marked known_bad for a solver
 // are measured and REPORTED (line "KNOWN_BAD ... fails/passes") but not asserted; one that
 // passes anyway is reported as "XPASS" so its flag can be flipped. Exit status non-zero on
