@@ -2,7 +2,7 @@
 // library against an extended-precision reference (hard_reference.hpp) on seeded families
 // of numerically hard linkages.
 //
-//   build/tests/reference/hardcases [--long] [--json FILE] [--only SUBSTRING] [--ref quad|ld]
+//   build/tests/reference/hardcases [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref quad|ld]
 //                                   [--dca-form sqrt|phi]
 //
 // Quick mode (default; `make check-hard`, part of `make check`): sizes up to 2,000 links,
@@ -26,7 +26,8 @@
 // Bound truth (issue 12, item 2; quick mode): every case, every eps = 2^-1 .. 2^-30 and the
 // exact DCA, four measures: certified == 0 or true <= error_bound + rounding_bound; on the
 // benign families certified == 1 wherever the truth allows (kBenignSlack). A per-family
-// summary (not certified, false bounds, tightness) ends the output.
+// summary (not certified, false bounds, tightness) ends the output. Long mode runs it only with
+// --sweep (up to 10^5 dofs; 124 solves per case).
 //
 // Assertions (quick mode): the thresholds table below. Cases marked known_bad for a solver
 // are measured and REPORTED (line "KNOWN_BAD ... fails/passes") but not asserted; one that
@@ -664,6 +665,12 @@ struct BoundTally {
 // 4 .. 150 on the chains, 4e3 .. 2e4 on the trees, docs/hardcases.md).
 bool benign_family(const std::string &f) { return f == "chain" || f == "tree"; }
 const double kBenignSlack = 3e4;
+// Up to this size (all of quick mode; long mode with --sweep: the chains to 16,384 links). The
+// estimate grows with the chain's length where the DCA's error does not: on the straight
+// 10^5-link chain under gravity it is 1.2e6 x the true error (1.2e-8 m/s^2 against 9.8e-15 in
+// abs_linkage), so eps = 2^-27 .. 2^-30 of the absolute measures are not certified there
+// (measured 2026-12-02, docs/hardcases.md).
+const int kBenignMaxDofs = 20000;
 const int kBoundExpMax = 30;  // eps = 2^-1 .. 2^-30, every exponent
 std::map<std::string, BoundTally> g_bound;
 
@@ -732,18 +739,19 @@ double pendulum_check() {
 }  // namespace
 
 int main(int argc, char **argv) {
-    bool long_mode = false;
+    bool long_mode = false, sweep_long = false;
     std::string json_path, only, ref_kind = "auto";
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--long") long_mode = true;
+        else if (a == "--sweep") sweep_long = true;  // the bound-truth sweep in long mode too
         else if (a == "--json" && i + 1 < argc) json_path = argv[++i];
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else if (a == "--ref" && i + 1 < argc) ref_kind = argv[++i];
         else if (a == "--dca-form" && i + 1 < argc && (std::strcmp(argv[i + 1], "sqrt") == 0 || std::strcmp(argv[i + 1], "phi") == 0))
             g_dca_form = std::strcmp(argv[++i], "phi") == 0 ? AQS_DCA_FORM_PHI : AQS_DCA_FORM_SQRT;
         else {
-            std::fprintf(stderr, "usage: %s [--long] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi]\n", argv[0]);
             return 2;
         }
     }
@@ -955,7 +963,7 @@ int main(int argc, char **argv) {
         // Bound truth: at every eps = 2^-e (e = 1..30) and the exact DCA (eps = 0), for all four
         // measures: true <= error_bound + rounding_bound, or certified == 0; on the benign
         // families certified must be 1 (else the check could pass trivially).
-        for (int metric = 0; metric < 4 && md.nv <= 100000 && !long_mode; ++metric) {
+        for (int metric = 0; metric < 4 && md.nv <= 100000 && (!long_mode || sweep_long); ++metric) {
             BoundTally &bt = g_bound[sp.family];
             double dca_true = NAN;  // the exact DCA's true error in this measure (e = 0, first)
             for (int e = 0; e <= kBoundExpMax; ++e) {
@@ -987,7 +995,8 @@ int main(int argc, char **argv) {
                 verdict(!stats.certified || holds, false, what + " (bound below the truth)");
                 if (g_dca_form == AQS_DCA_FORM_PHI)  // the estimate is for the square-root form only
                     verdict(stats.certified == 0, false, what + " (inverse-inertia form: certified)");
-                else if (benign_family(sp.family) && (e == 0 || eps >= kBenignSlack * dca_true))
+                else if (benign_family(sp.family) && md.nv <= kBenignMaxDofs &&
+                         (e == 0 || eps >= kBenignSlack * dca_true))
                     verdict(stats.certified == 1, false, what + " (benign: not certified)");
                 if (json)
                     std::fprintf(json,
