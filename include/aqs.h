@@ -583,6 +583,14 @@ typedef struct aqs_solve_stats {
     int32_t auto_chosen;     /**< 1 if the automatic path (aqs_linkage_set_auto) chose it */
     double cost_adaptive;    /**< the automatic path's predicted cost of the adaptive path, instructions (0 when it did not choose) */
     double cost_exact;       /**< the same for the exact path */
+    double rounding_bound;   /**< estimate with margin of what the DCA's rounding adds to the measure:
+                                  against the true solution, measure <= error_bound + rounding_bound
+                                  when certified (+inf when no bound can be given) */
+    int32_t certified;       /**< 1: error_bound + rounding_bound is a bound (an estimate with a
+                                  safety factor, docs/math.md) and rounding_bound <= eps (eps > 0);
+                                  0: no honest bound (rounding above eps, a near-singular pivot, the
+                                  inverse-inertia form, or an exact solve by the ABA, which does not
+                                  estimate its rounding) */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

@@ -7,6 +7,7 @@
 #include "factor.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -297,6 +298,92 @@ static void test_bound_holds_random(void **state)
                   chains, t.violations, t.worst_ratio);
     assert_int_equal(t.violations, 0);
     assert_true(t.checks == 500 * 4 * 21);
+}
+
+/* aqs_solve_stats.rounding_bound and certified (issue 12, item 2; the truth
+ * checks are in tests/reference/hardcases.cpp against a __float128
+ * reference): the exact articulated-body solve does not estimate (+inf, 0);
+ * the exact DCA does, and its estimate covers its distance to that
+ * independent solve on benign random linkages; adaptive solves are certified
+ * with rounding_bound <= eps, and not certified below the rounding; a caller
+ * with the older 56-byte struct does not get the new fields. */
+static void test_rounding_estimate(void **state)
+{
+    uint64_t rng = 777;
+    int c, certified = 0;
+    (void)state;
+    for (c = 0; c < 40; c++) {
+        spec sp;
+        aqs_linkage *L;
+        aqs_solve_stats st;
+        int32_t nv, metric = c % 4, k;
+        double aba[600], dca[600], d2 = 0.0, n2 = 0.0;
+        sp.nbodies = 2 + (int32_t)test_uniform(&rng, 0, 60);
+        sp.floating = c % 3 == 0;
+        sp.gravity = 1;
+        sp.nforces = 1 + (int)test_uniform(&rng, 0, 10);
+        sp.revolute_only = c % 2;
+        sp.mass_spread = 3.0;
+        sp.chain = c % 5 == 1;
+        L = random_linkage(&rng, &sp);
+        assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
+        assert_true(nv <= 600);
+        memset(&st, 0, sizeof st);
+        st.size = sizeof st;
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(st.certified, 0);
+        assert_true(isinf(st.rounding_bound));
+        assert_int_equal(aqs_linkage_get_accelerations(L, aba, (size_t)nv), AQS_OK);
+        /* the exact DCA, measured in abs_linkage: its distance to the ABA */
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_LINKAGE, 0.0), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(L, dca, (size_t)nv), AQS_OK);
+        for (k = 0; k < nv; k++) {
+            d2 += (dca[k] - aba[k]) * (dca[k] - aba[k]);
+            n2 += aba[k] * aba[k];
+        }
+        assert_int_equal(st.certified, 1);
+        /* free joints are outside the measure: compare with the linkage-wide
+         * norm only when there is none */
+        if (!sp.floating) assert_true(sqrt(d2) <= st.rounding_bound);
+        assert_true(st.rounding_bound < 1e-9 * (1.0 + sqrt(n2)));
+        for (k = 1; k <= 30; k += 29) {
+            const double eps = ldexp(1.0, -k) * (metric % 2 ? 1.0 : 1.0 + sqrt(n2));
+            assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+            assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+            assert_true(st.rounding_bound >= 0.0);
+            if (st.certified) {
+                assert_true(st.rounding_bound <= eps);
+                certified++;
+            }
+        }
+        assert_int_equal(aqs_linkage_set_tolerance(L, metric, 1e-300), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(st.certified, 0);
+        assert_true(st.rounding_bound > 1e-300);
+        {
+            /* the older struct: the new fields stay as the caller left them */
+            union {
+                aqs_solve_stats s;
+                unsigned char b[sizeof(aqs_solve_stats)];
+            } u;
+            memset(u.b, 0xAB, sizeof u.b);
+            u.s.size = (uint32_t)offsetof(aqs_solve_stats, rounding_bound);
+            assert_int_equal(aqs_linkage_get_stats(L, &u.s), AQS_OK);
+            for (k = (int32_t)offsetof(aqs_solve_stats, rounding_bound); k < (int32_t)sizeof u.b; k++)
+                assert_int_equal(u.b[k], 0xAB);
+        }
+        aqs_linkage_destroy(L);
+    }
+    /* benign random linkages: certified at 2^-1 and at 2^-30 (times the
+     * solution's scale for the absolute measures) */
+    assert_int_equal(certified, 40 * 2);
 }
 
 /* The paper's sqrt(sum) bound for the joint measures is certified too, and
@@ -1346,6 +1433,7 @@ int main(void)
         cmocka_unit_test(test_eps_zero_trajectory),
         cmocka_unit_test(test_cost_is_local),
         cmocka_unit_test(test_exact_fallback),
+        cmocka_unit_test(test_rounding_estimate),
     };
     return cmocka_run_group_tests_name("adaptive", tests, NULL, NULL);
 }

@@ -934,6 +934,8 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.auto_chosen = L->ap.chose;
     full.cost_adaptive = L->ap.cost_adaptive;
     full.cost_exact = L->ap.cost_exact;
+    full.rounding_bound = L->s.rounding;
+    full.certified = L->s.certified;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }

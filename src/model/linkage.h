@@ -50,6 +50,12 @@ typedef struct {
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
                              first jw columns (<= rank; 6 when compressed and that handle is
                              the first) */
+    /* Rounding estimate (src/solve/rounding.c, docs/math.md "The rounding term"),
+     * relative error levels in units of u: rk of the node's reduced factors
+     * (U, E, QX, FX), rkb of its b; absolute errors (2-norms) of rho and
+     * gamma; resub the largest rho error in the subtree. (The handle forces'
+     * errors are per handle: tree.rnd_x.) */
+    double rk, rkb, rerho, regam, resub;
 } node;
 
 typedef struct {
@@ -86,6 +92,9 @@ typedef struct {
     int all_dirty;
     int32_t nodes_updated; /* by the last update */
     int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
+    double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
+                          of its handle forces (src/solve/rounding.c), set by the back-substitution;
+                          allocated by dca_enable */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -150,6 +159,12 @@ typedef struct {
     int32_t npred;
     int32_t npredicted;     /* nodes the last solve processed because they were predicted */
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
+    /* Rounding estimate of the last solve (src/solve/rounding.c) */
+    double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
+    double rk_max;          /* largest relative error level met (units of u) */
+    int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
+    double rounding;        /* aqs_solve_stats.rounding_bound */
+    int certified;          /* aqs_solve_stats.certified */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/solve/aba.c): scratch

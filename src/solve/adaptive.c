@@ -12,6 +12,7 @@
 #include "dca.h"
 #include "frames.h"
 #include "heap.h"
+#include "rounding.h"
 #include "stale.h"
 #include "totalacc.h"
 
@@ -107,9 +108,11 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
     solve_state *s = &L->s;
     const node *nd = &L->t.nodes[n];
     int32_t child[2] = {nd->a, nd->b}, i, nk = 0;
+    const int counted = L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE;
     dca_node_backsub(L, n);
+    rounding_backsub(L, n, counted);
     s->processed[s->nprocessed++] = n;
-    if (L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE) {
+    if (counted) {
         double q = norm_qdd(L, n);
         s->computed++;
         s->comp_sq += q * q;
@@ -307,6 +310,7 @@ void adaptive_mark_exact(aqs_linkage *L)
     s->lower = s->sum = 0.0;
     s->capped = 0;
     finish_exact(L);
+    rounding_none(L);
 }
 
 void adaptive_solve(aqs_linkage *L)
@@ -320,11 +324,13 @@ void adaptive_solve(aqs_linkage *L)
     s->sum = 0.0;
     s->comp_sq = 0.0;
     s->npredicted = 0;
+    rounding_solve_start(L);
     stale_set_refinable(L, 0);
     if (t->nnodes == 0) { /* nothing moves */
         if (L->m.comp_welded[L->m.ncomp])
             dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
         finish_exact(L);
+        rounding_finish(L);
         return;
     }
     if (s->eps == 0.0 && s->max_computed == 0) {
@@ -332,6 +338,7 @@ void adaptive_solve(aqs_linkage *L)
         for (n = t->nnodes - 1; n >= 0; n--)
             if (t->nodes[n].joint >= 0) process(L, n, kids);
         finish_exact(L);
+        rounding_finish(L);
         return;
     }
     {
@@ -364,6 +371,7 @@ void adaptive_solve(aqs_linkage *L)
         }
         run(L, &h, s->eps);
     }
+    rounding_finish(L);
     stale_set_refinable(L, 1);
 }
 
@@ -375,6 +383,7 @@ void adaptive_refine(aqs_linkage *L, double eps)
     h.size = s->heap_size;
     s->capped = 0;
     run(L, &h, eps);
+    rounding_finish(L);
 }
 
 void adaptive_integrate(aqs_linkage *L, double h)

@@ -10,6 +10,7 @@
 #include "dense.h"
 #include "frames.h"
 #include "model.h"
+#include "rounding.h"
 #include "stale.h"
 
 static int mp_inverse_factor(const double *mp, double *Y);
@@ -22,6 +23,8 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     tree *t = &L->t;
     int32_t n;
     if (t->data) return AQS_OK;
+    if (!t->rnd_x && !(t->rnd_x = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
@@ -457,6 +460,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         gw[i] = x;
     }
     memcpy(gamma, gw, sizeof gw);
+    rounding_node(L, n, U, G2, E, beta, Q, Lc, ncol, bo);
     return 0;
 }
 

@@ -579,8 +579,9 @@ def test_adaptive_step_moves_only_computed_joints():
 def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
              "nodes_updated", "nodes_processed", "capped", "fallback", "nodes_predicted",
-             "factors_updated", "path", "auto_chosen", "cost_adaptive", "cost_exact"]
-    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float]
+             "factors_updated", "path", "auto_chosen", "cost_adaptive", "cost_exact",
+             "rounding_bound", "certified"]
+    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float, float, bool]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -616,7 +617,8 @@ def test_stats_struct_size_is_honoured():
                                            nodes_updated=-7, nodes_processed=-7, capped=-7,
                                            fallback=-7, nodes_predicted=-7, factors_updated=-7,
                                            path=-7, auto_chosen=-7, cost_adaptive=-7.0,
-                                           cost_exact=-7.0)
+                                           cost_exact=-7.0, rounding_bound=-7.0,
+                                           certified=-7)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:
@@ -868,3 +870,48 @@ def test_auto(name):
             assert stats.error_bound <= 2.0 ** -20
         L.set_auto(1)
         assert L.auto is True
+def _measure_diff(metric, case, a, b):
+    """The measure of aqs.h applied to the difference a - b over every counted joint."""
+    slices = joint_slices(case)
+    err = [np.linalg.norm(a[slices[k][1]] - b[slices[k][1]]) for k in counted(case)]
+    ref = [np.linalg.norm(b[slices[k][1]]) for k in counted(case)]
+    if metric in ("abs_linkage", "rel_linkage"):
+        e = math.sqrt(sum(x * x for x in err))
+        return e / math.sqrt(sum(x * x for x in ref)) if metric == "rel_linkage" else e
+    return max(err) / max(ref) if metric == "rel_joint" else max(err)
+
+
+@pytest.mark.parametrize("metric", METRICS)
+def test_rounding_bound_and_certified(metric):
+    """SolveStats.rounding_bound and certified (aqs.h, docs/api.md "What the bound
+    covers"): the exact ABA does not estimate its rounding (inf, not certified);
+    the exact DCA's estimate covers its distance to the ABA (an independent solver,
+    ~1e-15 off on this benign tree, far below the estimate); adaptive solves are
+    certified with 0 < rounding_bound <= eps, and not certified when eps is below
+    the rounding; the "phi" form is never certified."""
+    case, acc_aba, _ = exact("tree-60-mixed")
+    with build(aqs, case) as L:
+        st = L.solve()  # exact, articulated-body algorithm
+        assert st.certified is False and st.rounding_bound == INF
+        L.set_exact_solver("dca")
+        L.set_tolerance(metric, 0.0)
+        st = L.solve()
+        assert st.certified is True and 0.0 < st.rounding_bound < 1e-9
+        assert _measure_diff(metric, case, L.accelerations(), acc_aba) <= st.rounding_bound
+        L.set_exact_solver("aba")
+        for k in (1, 10, 20, 30):
+            st = L.set_tolerance(metric, 2.0 ** -k) or L.solve()
+            assert st.certified is True, (k, st)
+            assert 0.0 < st.rounding_bound <= 2.0 ** -k
+            assert math.isfinite(st.error_bound + st.rounding_bound)
+        L.set_tolerance(metric, 1e-300)  # below any rounding: computed, but not certified
+        st = L.solve()
+        assert st.error_bound == 0.0 and st.certified is False and st.rounding_bound > 1e-300
+        refined = L.refine(1e-301)
+        assert refined.certified is False
+    phi = aqs.Linkage()
+    phi.set_dca_form("phi")
+    with build(aqs, case, linkage=phi) as L:
+        L.set_tolerance(metric, 2.0 ** -10)
+        st = L.solve()
+        assert st.certified is False and st.rounding_bound == INF

@@ -127,10 +127,11 @@ def test_structs_match(header):
         fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
         mirror = STRUCTS[tag]
         assert [(n, FIELD_TYPES[t]) for t, n in fields] == list(mirror._fields_), tag
-    # The C layout with natural alignment: no padding, 80 bytes.
+    # The C layout with natural alignment: 88 bytes of fields, padded to 96.
     stats = _lib.aqs_solve_stats
-    assert ctypes.sizeof(stats) == 80
+    assert ctypes.sizeof(stats) == 96
     assert stats.eps.offset == 8 and stats.computed_joints.offset == 24
     assert stats.fallback.offset == 44 and stats.factors_updated.offset == 52
     assert stats.path.offset == 56 and stats.cost_adaptive.offset == 64 and stats.cost_exact.offset == 72
+    assert stats.rounding_bound.offset == 80 and stats.certified.offset == 88
     assert ctypes.sizeof(_lib.aqs_collision_stats) == 32  # eight 4-byte fields

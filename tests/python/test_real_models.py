@@ -263,10 +263,20 @@ def _check_model(name, L, hardref, known_bad):
         assert e_aba <= ABA_TOL, "%s: ABA error %.2e" % (name, e_aba)
 
         problems = []
+        false_bounds = []  # certified solves whose error_bound + rounding_bound is below the truth
+
+        def bound_holds(what, metric, st, acc):
+            true = _measure(metric, acc, ref, slots)
+            if st.certified and not true <= (st.error_bound + st.rounding_bound) * (1 + 1e-9):
+                false_bounds.append("%s %s: true %.2e > error_bound %.2e + rounding_bound %.2e" %
+                                    (what, metric, true, st.error_bound, st.rounding_bound))
+
         e_dca_report = [None]
         L.set_exact_solver("dca")
         try:
-            L.solve()
+            for metric in METRICS:  # the exact DCA's rounding estimate, in each measure
+                L.set_tolerance(metric, 0.0)
+                bound_holds("exact DCA", metric, L.solve(), L.accelerations())
             e_dca = np.linalg.norm(L.accelerations() - ref) / nref
             e_dca_report[0] = float(e_dca)
             if e_dca > DCA_VS_ABA * max(e_aba, ERR_FLOOR):
@@ -286,9 +296,17 @@ def _check_model(name, L, hardref, known_bad):
                     problems.append("adaptive %s eps %g: %s" % (metric, eps, exc))
                     continue
                 true = _measure(metric, L.accelerations(), ref, slots)
+                bound_holds("adaptive eps %g" % eps, metric, st, L.accelerations())
                 if not true <= st.error_bound * (1 + 1e-9) + allowance:
                     problems.append("adaptive %s eps %g: true %.2e > bound %.2e" %
                                     (metric, eps, true, st.error_bound))
+            for k in range(1, 31, 3):  # the bound alone, eps = 2^-1 .. 2^-28
+                L.set_tolerance(metric, 2.0 ** -k)
+                try:
+                    st = L.solve()
+                except aqs.Error:
+                    continue  # reported above
+                bound_holds("adaptive eps 2^-%d" % k, metric, st, L.accelerations())
             L.set_tolerance(metric, 0.0)
         report = os.environ.get("AQS_REAL_MODELS_REPORT")
         if report:  # one JSON line per model, for docs/hardcases.md
@@ -296,6 +314,10 @@ def _check_model(name, L, hardref, known_bad):
             with open(report, "a") as fh:
                 fh.write(json.dumps(dict(model=name, nv=L.nv, aba=e_aba, dca=e_dca_report[0],
                                          problems=len(problems), first=problems[:1])) + "\n")
+        # Issue 12, item 2: a certified bound holds against the quad reference on every model,
+        # known bad or not.
+        assert not false_bounds, "%s: %d certified bounds below the truth, first: %s" % (
+            name, len(false_bounds), false_bounds[0])
         if problems:
             msg = "%s (ABA %.1e): %d problems, first: %s" % (name, e_aba, len(problems), problems[0])
             if name in known_bad:

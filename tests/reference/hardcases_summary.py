@@ -7,6 +7,11 @@
   bound at all (the bound is for exact arithmetic, so rounding alone does it) | solves that
   exceed it by more than the rounding allowance (the check hardcases asserts)
 
+then, from the bound-truth sweep's records ("solver": "bound"), one row per family: solves,
+how many error_bound alone put below the truth, not certified, certified bounds below the
+truth (asserted 0), tightness (error_bound + rounding_bound) / true over the certified solves,
+and rounding_bound / true on the exact DCA (docs/hardcases.md).
+
 Usage: python3 tests/reference/hardcases_summary.py FILE.jsonl [> table.md]
 """
 import json
@@ -20,9 +25,12 @@ def fmt(x):
 
 
 def main(path):
-    rows, order = {}, []
+    rows, order, bound = {}, [], {}
     for line in open(path):
         r = json.loads(line)
+        if r.get("solver") == "bound":
+            bound.setdefault(r["family"], []).append(r)
+            continue
         name = r["case"]
         if name not in rows:
             rows[name] = {"adaptive": {m: [] for m in METRICS}}
@@ -61,6 +69,25 @@ def main(path):
             name, row["dofs"], fmt(aba["rel2"]), dcs, " | ".join(cols),
             "%d / %d" % (exceeded, total) if total else "-",
             "%d / %d" % (beyond, total) if total else "-"))
+    if bound:
+        print()
+        print("| family | solves | error_bound alone below the truth | not certified | "
+              "certified bound below the truth | tightness min / median / max | "
+              "rounding_bound / true, exact DCA: min / median / max |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        for fam, rs in bound.items():
+            n = len(rs)
+            old = sum(1 for r in rs if r["true"] > r["error_bound"] * (1 + 1e-9))
+            unc = sum(1 for r in rs if not r["certified"])
+            cert = [r for r in rs if r["certified"]]
+            false = sum(1 for r in cert if r["true"] > (r["error_bound"] + r["rounding_bound"]) * (1 + 1e-9))
+            tight = sorted((r["error_bound"] + r["rounding_bound"]) / r["true"] for r in cert if r["true"] > 0)
+            exact = sorted(r["rounding_bound"] / r["true"] for r in cert if r["eps"] == 0 and r["true"] > 0)
+
+            def mmm(v):
+                return "%s / %s / %s" % (fmt(v[0]), fmt(v[len(v) // 2]), fmt(v[-1])) if v else "-"
+            print("| %s | %d | %d (%.0f%%) | %d (%.0f%%) | %d | %s | %s |" % (
+                fam, n, old, 100.0 * old / n, unc, 100.0 * unc / n, false, mmm(tight), mmm(exact)))
 
 
 if __name__ == "__main__":

@@ -175,6 +175,15 @@ class SolveStats:
     auto_chosen: True if the automatic path (set_auto) chose it.
     cost_adaptive, cost_exact: the automatic path's predicted costs of the
         two paths, in instructions (0.0 when it did not choose).
+    rounding_bound: an estimate with a safety factor of what the
+        divide-and-conquer solver's rounding adds to the measure, same unit as
+        eps: against the true solution, the measure is at most error_bound +
+        rounding_bound when certified. inf when no bound can be given.
+    certified: True if error_bound + rounding_bound bounds the measure against
+        the true solution and rounding_bound <= eps (eps > 0); False where no
+        honest bound can be given: the rounding exceeds eps, a near-singular
+        pivot, the "phi" DCA form, or an exact solve by the articulated-body
+        algorithm (which does not estimate its rounding).
     """
 
     metric: str
@@ -192,6 +201,8 @@ class SolveStats:
     auto_chosen: bool = False
     cost_adaptive: float = 0.0
     cost_exact: float = 0.0
+    rounding_bound: float = 0.0
+    certified: bool = False
 
     @classmethod
     def _from_c(cls, c):
@@ -202,7 +213,8 @@ class SolveStats:
                    fallback=bool(c.fallback), nodes_predicted=int(c.nodes_predicted),
                    factors_updated=int(c.factors_updated),
                    path=_lib.PATH_NAMES.get(c.path, str(c.path)), auto_chosen=bool(c.auto_chosen),
-                   cost_adaptive=float(c.cost_adaptive), cost_exact=float(c.cost_exact))
+                   cost_adaptive=float(c.cost_adaptive), cost_exact=float(c.cost_exact),
+                   rounding_bound=float(c.rounding_bound), certified=bool(c.certified))
 
 
 def version():

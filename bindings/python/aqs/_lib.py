@@ -190,6 +190,8 @@ class aqs_solve_stats(ctypes.Structure):
         ("auto_chosen", ctypes.c_int32),      # 1 if the automatic path chose it
         ("cost_adaptive", ctypes.c_double),   # its predicted cost of the adaptive path (instructions)
         ("cost_exact", ctypes.c_double),      # and of the exact path
+        ("rounding_bound", ctypes.c_double),  # estimate of what the DCA's rounding adds (inf: none)
+        ("certified", ctypes.c_int32),        # 1: error_bound + rounding_bound is a bound, <= eps
     ]
 
 

@@ -1,0 +1,294 @@
+/* rounding.c -- a running estimate of the DCA's rounding error in the joint
+ * accelerations (docs/math.md, "The rounding term"; issue 12, item 2).
+ *
+ * Model: a quantity the DCA computes as a sum carries an error of u times a
+ * relative level times the magnitude of its terms. Levels go up the tree with
+ * the node update (per node, in node.rk/rkb/rerho/regam/resub):
+ *   rk   of the reduced factors (U, E, QX, FX): max over the children +
+ *        RND_G0 + the pivot ratio of Lc (the square root of the mobility
+ *        across the joint's constrained directions: a near point mass or a
+ *        tiny base makes it large) + the square root of the children's mass
+ *        ratio (heavy and light parts in one factor: their rows' norms go
+ *        like 1/sqrt(mass), docs/math.md 4a);
+ *   rkb  of b: carried through beta = X b^A_k - b^B_k and through
+ *        b_C = b_o + X1 E beta + X2 K2^T Sd Q with their cancellation ratios
+ *        (largest term / result, from the terms' actual norms);
+ *   rerho, regam: absolute errors of rho = -U beta + G2 Q and
+ *        gamma = W beta + U^T Q, F u max(rk, level of beta) times their
+ *        entrywise product sums.
+ * The back-substitution goes down with absolute errors of the handle forces
+ * (per handle, tree.rnd_x): f = gamma + FX x gets e(gamma), each handle's
+ * relative error times its share |FX_h x_h|, and F u rk (|gamma| + sum |FX_h
+ * x_h|); the child's handle k inherits f's error, the others keep theirs. The
+ * joint's acceleration qdd = rho - QX x then has
+ *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|,
+ * F = RND_SAFETY. A carried level grows by a cancellation ratio r only past
+ * RND_R0 (terms of similar size that combine do not all err the same way);
+ * the sum's own rounding adds RND_G0 r. A first-order estimate with a safety
+ * factor, not a theorem: tests/reference/hardcases.cpp checks it against the
+ * quad reference on every family at every eps 2^-1 .. 2^-30. */
+#include "rounding.h"
+
+#include <math.h>
+
+#define RND_G0 2.0
+#define RND_R0 8.0
+
+static double maxd(double a, double b) { return a > b ? a : b; }
+static double n6(const double *v)
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+}
+/* max(1, terms / result): the growth of a relative error through a sum */
+static double ratio(double terms, double result)
+{
+    if (!(terms > 0.0)) return 1.0;
+    if (!(result > 0.0)) return INFINITY;
+    return maxd(1.0, terms / result);
+}
+/* A level k carried through a sum with cancellation ratio r: the sum's own
+ * rounding adds RND_G0 r; the carried error grows by r only where r exceeds
+ * RND_R0 (terms of comparable size that combine are not a cancellation: the
+ * errors of a sum of a few terms do not all add up in the same direction). */
+static double carry(double k, double r) { return k * maxd(1.0, r / RND_R0) + RND_G0 * r; }
+
+static void child_levels(const node *c, double *k, double *kb)
+{
+    if (c->joint >= 0) {
+        *k = c->rk;
+        *kb = c->rkb;
+    } else { /* a leaf: data, and b = I^-1 f rounded a few times */
+        *k = 1.0;
+        *kb = RND_G0;
+    }
+}
+
+void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
+                   const double *beta, const double *Q, const double *Lc, int32_t ncol, const double *bo)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
+    const double *FX = t->data + C->W, *bC = t->data + C->bv, *bB = t->data + B->bv;
+    const double fu = RND_SAFETY * RND_U;
+    double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
+    int32_t i, j, k, h;
+
+    child_levels(A, &kA, &kbA);
+    child_levels(B, &kB, &kbB);
+    if (c > 0) {
+        double pmax = 0.0, pmin = INFINITY;
+        for (i = 0; i < c; i++) {
+            double p = fabs(Lc[(int64_t)i * ncol + i]);
+            pmax = maxd(pmax, p);
+            if (p < pmin) pmin = p;
+        }
+        g += pmin > 0.0 ? pmax / pmin : INFINITY;
+    }
+    /* beta = X b^A_k - b^B_k */
+    bn = n6(beta);
+    for (i = 0; i < 6; i++) xa[i] = beta[i] + bB[6 * C->kb + i];
+    kbeta = carry(maxd(kbA, kbB), ratio(maxd(n6(xa), n6(bB + 6 * C->kb)), bn));
+    /* b_C(h) = b_o(h) + X1E_h beta + X2_h K2^T Sd Q with X1 E = -FX^T: the
+     * three terms' norms (the last as b_C - b_o - X1E_h beta) */
+    kb = 1.0;
+    for (h = 0; h < C->nh; h++) {
+        const double *bch = bC + 6 * h, *boh = bo + 6 * h;
+        double v[6], w[6];
+        for (i = 0; i < 6; i++) {
+            const int32_t o = 6 * h + i;
+            const double *fx = FX + o;
+            v[i] = -(fx[0] * beta[0] + fx[orows] * beta[1] + fx[2 * orows] * beta[2] + fx[3 * orows] * beta[3] +
+                     fx[4 * orows] * beta[4] + fx[5 * orows] * beta[5]);
+            w[i] = bch[i] - boh[i] - v[i];
+        }
+        kb = maxd(kb, ratio(maxd(maxd(n6(boh), n6(v)), n6(w)), n6(bch)));
+    }
+    /* heavy and light parts in one node: the square root of the children's
+     * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
+    {
+        const double mA = t->data[A->ic], mB = t->data[B->ic];
+        if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
+    }
+    kappa = maxd(kA, kB) + g;
+    kbeta = maxd(kbeta, kappa);
+    kb = carry(maxd(maxd(kbA, kbB), kappa), kb);
+    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
+    for (i = 0; i < d; i++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
+        for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
+        srho += a * a;
+    }
+    for (k = 0; k < c; k++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
+        eb[k] = a;
+    }
+    for (j = 0; j < 6; j++) {
+        double a = 0.0;
+        for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
+        for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+        sgam += a * a;
+    }
+    C->rerho = fu * kbeta * sqrt(srho);
+    C->regam = fu * kbeta * sqrt(sgam);
+    C->rk = kappa;
+    C->rkb = kb;
+    {
+        double sub = C->rerho;
+        if (A->joint >= 0) sub = maxd(sub, A->resub);
+        if (B->joint >= 0) sub = maxd(sub, B->resub);
+        C->resub = sub;
+    }
+}
+
+void rounding_solve_start(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    tree *t = &L->t;
+    s->rc_sq = s->rc_max = s->rk_max = 0.0;
+    s->rnd_ok = t->rnd_x != NULL; /* allocated by dca_enable with the coefficients */
+}
+
+/* The estimated error (2-norm) of node n's joint acceleration from its
+ * handle forces; with set, also the children's handle-force errors. */
+static double joint_error(aqs_linkage *L, int32_t n, int set)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U, *ex = t->rnd_x + C->handles;
+    const int32_t d = C->d, rows = 6 * C->nh;
+    const double fu = RND_SAFETY * RND_U, ku = fu * C->rk;
+    double sq = 0.0, qe = 0.0;
+    int32_t h, i, k;
+    /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
+     * QX's error), and each handle's relative error carried by its share
+     * QX_h x_h */
+    {
+        double a[6] = {0, 0, 0, 0, 0, 0}, q[6];
+        for (h = 0; h < C->nh; h++) {
+            const double *xh = x + 6 * h;
+            const double xn = n6(xh), w = xn > 0.0 ? ex[h] / xn : 0.0;
+            double qq = 0.0;
+            for (i = 0; i < d; i++) {
+                const double *qr = QX + (int64_t)i * rows + 6 * h;
+                const double p0 = qr[0] * xh[0], p1 = qr[1] * xh[1], p2 = qr[2] * xh[2], p3 = qr[3] * xh[3],
+                             p4 = qr[4] * xh[4], p5 = qr[5] * xh[5];
+                a[i] += fabs(p0) + fabs(p1) + fabs(p2) + fabs(p3) + fabs(p4) + fabs(p5);
+                q[i] = p0 + p1 + p2 + p3 + p4 + p5;
+                qq += q[i] * q[i];
+            }
+            qe += w * sqrt(qq);
+        }
+        for (i = 0; i < d; i++) sq += a[i] * a[i];
+        (void)k;
+    }
+    if (set) {
+        /* f = gamma + FX x: each handle force's relative error carried by its
+         * share FX_h x_h, plus the rounding; the children's handle k gets f
+         * (its relative error kept through the transform), the others keep
+         * theirs (the order of dca_node_backsub) */
+        node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+        const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
+        const double fn = n6(f);
+        double ef = C->regam, sf = n6(t->data + C->gamma), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
+        int32_t ci;
+        for (h = 0; h < C->nh; h++) {
+            const int32_t o = 6 * h;
+            const double xn = n6(x + o);
+            double v[6], vn;
+            if (xn == 0.0) continue;
+            for (i = 0; i < 6; i++) {
+                const double *fr = FX + (int64_t)i * rows + o;
+                v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
+                       fr[5] * x[o + 5];
+            }
+            vn = n6(v);
+            ef += ex[h] / xn * vn;
+            sf += vn;
+        }
+        ef += ku * sf;
+        for (i = 0, ci = 0; i < A->nh; i++) {
+            if (i == C->ka) {
+                const double xk = n6(t->data + A->xf + 6 * i);
+                exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
+            } else
+                exA[i] = ex[ci++];
+        }
+        for (i = 0; i < B->nh; i++) {
+            if (i == C->kb) exB[i] = ef;
+            else exB[i] = ex[ci++];
+        }
+    }
+    return C->rerho + qe + ku * sqrt(sq);
+}
+
+void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
+{
+    solve_state *s = &L->s;
+    double e = joint_error(L, n, 1);
+    s->rk_max = maxd(s->rk_max, L->t.nodes[n].rk);
+    if (counted) {
+        s->rc_sq += e * e;
+        s->rc_max = maxd(s->rc_max, e);
+    }
+}
+
+void rounding_finish(aqs_linkage *L)
+{
+    solve_state *s = &L->s;
+    tree *t = &L->t;
+    double ru_sq = 0.0, ru_max = 0.0, kmax = s->rk_max, r2, rmax, tabs, den, tot, T, top = 0.0;
+    int valid = L->dca_form != AQS_DCA_FORM_PHI && s->rnd_ok;
+    int32_t i;
+    if (t->nnodes == 0) {
+        s->rounding = 0.0;
+        s->certified = 1;
+        return;
+    }
+    if (!s->all)
+        for (i = 0; i < s->heap_size; i++) {
+            int32_t n = s->heap_item[i];
+            const node *nd = &t->nodes[n];
+            /* its own joint from its handle forces, or any rho below it */
+            double e = maxd(joint_error(L, n, 0), nd->resub);
+            ru_sq += (double)nd->ncount * e * e;
+            ru_max = maxd(ru_max, e);
+            top = maxd(top, s->heap_key[i]);
+            kmax = maxd(kmax, nd->rk);
+        }
+    r2 = sqrt(s->rc_sq + ru_sq);
+    rmax = maxd(s->rc_max, ru_max);
+    T = s->all ? 0.0 : s->bound;
+    switch (s->metric) {
+    case AQS_METRIC_ABS_LINKAGE: tot = T + r2; break;
+    case AQS_METRIC_ABS_JOINT: tot = T + rmax; break;
+    case AQS_METRIC_REL_LINKAGE:
+        /* ||ref_all|| >= sqrt(A(root)) - r2 */
+        tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);
+        den = s->all ? s->comp_sq : (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
+        den = sqrt(den > 0.0 ? den : 0.0);
+        if (tabs + r2 == 0.0) tot = T;
+        else if (den > r2) tot = maxd(T, (tabs + r2) / (den - r2));
+        else tot = INFINITY;
+        break;
+    default: /* REL_JOINT: sqrt(top) / L, max_j ||ref_j|| >= L - rmax */
+        tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(maxd(s->joint_bound == AQS_JOINT_BOUND_SUM ? s->sum : top, 0.0));
+        den = s->lower;
+        if (tabs + rmax == 0.0) tot = T;
+        else if (den > rmax) tot = maxd(T, (tabs + rmax) / (den - rmax));
+        else tot = INFINITY;
+        break;
+    }
+    if (!(kmax * RND_SAFETY * RND_U <= RND_KAPPA_MAX) || !isfinite(tot)) valid = 0;
+    s->rounding = valid ? maxd(tot - T, 0.0) : INFINITY;
+    s->certified = valid && (s->eps == 0.0 || s->rounding <= s->eps);
+}
+
+void rounding_none(aqs_linkage *L)
+{
+    L->s.rounding = INFINITY;
+    L->s.certified = 0;
+}

@@ -1,0 +1,39 @@
+/* rounding.h -- a running estimate of the DCA's rounding error in the joint
+ * accelerations, with a safety factor (docs/math.md, "The rounding term"):
+ * per node from the conditioning its update sees, per solve along the
+ * back-substitution, and for the queued (uncomputed) subtrees. */
+#ifndef AQS_ROUNDING_H
+#define AQS_ROUNDING_H
+
+#include "linkage.h"
+
+/* Unit roundoff of double (2^-53) and the safety factor on every local
+ * rounding term. */
+#define RND_U 1.1102230246251565e-16
+#define RND_SAFETY 8.0
+/* Past this relative error level (kappa u) the first-order estimate itself is
+ * not trusted: the solve is not certified. */
+#define RND_KAPPA_MAX 1e-3
+
+/* Node n (square-root form), at the end of its coefficients: U (d x 6), G2 =
+ * Sd^T K2 K2^T Sd (d x d), E = Lc^-1 Tc^T (c x 6), beta, the joint force Q,
+ * the constraint rows' factor Lc (its c pivots, row stride ncol) and the
+ * outer handles' b. Reads the node's FX, b and mass properties and its
+ * children's levels; sets n's rk, rkb, rerho, regam, resub. */
+void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
+                   const double *beta, const double *Q, const double *Lc, int32_t ncol, const double *bo);
+/* Before a solve's back-substitution: the root's handle forces are exact,
+ * the per-solve sums zero. */
+void rounding_solve_start(aqs_linkage *L);
+/* After dca_node_backsub(L, n): the estimated absolute error (2-norm) of
+ * the joint's acceleration, and the children's handle-force errors. Adds it
+ * to the solve's sums unless the joint is free. */
+void rounding_backsub(aqs_linkage *L, int32_t n, int counted);
+/* After a solve or refine: the queued nodes' uncomputed joints, then
+ * L->s.rounding and L->s.certified for the measure in force. */
+void rounding_finish(aqs_linkage *L);
+/* A solve whose rounding is not estimated (the articulated-body algorithm):
+ * rounding = +inf, certified = 0. */
+void rounding_none(aqs_linkage *L);
+
+#endif
