@@ -15,5 +15,8 @@ void aba_free(aqs_linkage *L);
  * as an exact solve. Returns AQS_OK, or AQS_ENUMERIC (message set) when an
  * articulated inertia is numerically singular. */
 aqs_status aba_solve(aqs_linkage *L);
+/* The world pose of a composite's frame from the solve's own pose sweep:
+ * valid only while L->aba.world_valid (update_loads inside aba_solve). */
+void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
 
 #endif

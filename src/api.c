@@ -734,8 +734,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         char msg[sizeof L->error];
         memcpy(msg, L->error, sizeof msg);
         copy_moved_positions(L, L->q, L->q_saved);
-        update_all_poses(L);
-        stale_positions(L, -1);
+        update_positions_moved(L);
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
@@ -938,8 +937,7 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
 {
     if (!L->finalized) return;
     if (joint < 0) {
-        update_all_poses(L);
-        stale_positions(L, -1);
+        update_positions_moved(L);
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
         update_poses_from_joint(L, e);
@@ -960,6 +958,18 @@ AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, si
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
     if (n == 0) return AQS_OK; /* nothing to set: q may be NULL */
     CHECK_PTR(L, fn, q);
+    if (L->finalized && L->m.nquat == 0) {
+        /* Scalar coordinates only: one pass over the values; the joint loop
+         * below finds the joint of a bad value for the message. */
+        int ok = 1;
+        size_t i;
+        for (i = 0; i < n; i++) ok &= isfinite(q[i]) != 0;
+        if (ok) {
+            memcpy(L->q, q, sizeof(double) * n);
+            positions_changed(L, -1);
+            return AQS_OK;
+        }
+    }
     for (j = 0; j < L->njoints; j++)
         if ((st = check_joint_position(L, fn, j, q + L->joints[j].qoff, tmp)) != AQS_OK) return st;
     for (j = 0; j < L->njoints; j++)

@@ -9,6 +9,7 @@
 #include "collide.h"
 #include "linkage.h"
 #include "stale.h"
+#include "update.h"
 
 /* Get (creating on first use) the collision state. NULL on allocation failure. */
 static collision *collide_state(aqs_linkage *L)
@@ -18,6 +19,7 @@ static collision *collide_state(aqs_linkage *L)
         if (!L->col) return NULL;
         L->col->world_group = 1u;
         L->col->world_mask = 0xFFFFFFFFu;
+        update_poses(L); /* from now on the tree's poses follow every move */
     }
     return L->col;
 }

@@ -83,6 +83,9 @@ typedef struct {
     int all_dirty;
     int32_t nodes_updated; /* by the last update */
     int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
+    int poses_stale; /* the internal nodes' poses (and J) do not follow q: update_poses
+                        recomputes them when the DCA, the adaptive solver, collision or a
+                        world-pose query needs them (src/stale.c decides) */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -110,6 +113,7 @@ typedef struct {
     int32_t *members;       /* nbodies: bodies grouped by composite, parents first */
     int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
+    int32_t nquat;          /* joints with a quaternion (spherical, free) */
 } model;
 
 /* State of the last solve (adaptive back-substitution, MATH.md §6). */
@@ -149,16 +153,47 @@ typedef struct {
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
 } solve_state;
 
-/* The exact solve by the articulated-body algorithm (src/aba.c): scratch
- * sized at finalize, rewritten by every such solve. */
+/* The exact solve by the articulated-body algorithm (src/aba.c). Its data
+ * live in one order, the "ABA order" (composites depth first, parents
+ * before children, children by effective joint index: for a linkage added
+ * depth first it is the user's order), streamed forward and backward.
+ * Position k is composite aba_joint[k].comp hanging from its effective
+ * parent joint. Spatial inertias are packed symmetric [A B; B^T C]:
+ * A and C upper triangles (xx xy xz yy yz zz), B row-major 3x3. */
 typedef struct {
-    int32_t *order; /* ne effective joints, each after its parent composite's joint */
-    double *IA;     /* ncomp x 36: articulated inertia of the composite's subtree, its frame */
-    double *pA;     /* ncomp x 6: bias force of the subtree (minus the loads), its frame */
-    double *acc;    /* (ncomp + 1) x 6: acceleration minus g (root trick); world last */
-    double *U;      /* nv x 6: row k of joint e is IA S_k (S_k: dof k's column of S) */
-    double *u;      /* nv: Q - S^T pA */
-    double *x;      /* 6 x max handles: a welded composite's leaf handle forces */
+    pose place;       /* the joint frame in the parent composite's frame */
+    double axis[3];   /* the joint's axis (revolute, prismatic) */
+    double I[21];     /* the composite's spatial inertia, its frame, packed */
+    int32_t parent;   /* ABA position of the parent composite; -1: the world */
+    int32_t type;     /* AQS_JOINT_* */
+    int32_t qoff, voff;
+    int32_t joint;    /* user joint index */
+    int32_t comp;     /* the child composite */
+} aba_joint;
+
+/* Rewritten by every solve, same order. */
+typedef struct {
+    pose X;           /* the composite's frame in its parent's at the current q */
+    double IA[21];    /* articulated inertia of the subtree, its frame, packed */
+    double pA[6];     /* bias force of the subtree (minus the loads), its frame */
+    union {
+        struct {
+            double U[6];   /* IA S (1-dof joints) */
+            double acc[6]; /* acceleration minus g (root trick) */
+        } s;
+        pose world;   /* before the backward pass: the frame's world pose (loads) */
+    } v;
+    double u, Dinv;   /* Q - S^T pA and 1 / (S^T U) (1-dof joints) */
+} aba_node;
+
+typedef struct {
+    aba_joint *joint; /* ne, ABA order */
+    aba_node *node;   /* ne, ABA order */
+    int32_t *pos_of_comp; /* ncomp: ABA position of each composite */
+    double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
+    double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
+    double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
+    int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
 } aba_state;
 
 struct aqs_linkage {

@@ -281,6 +281,8 @@ aqs_status model_build(aqs_linkage *L)
     m->ncomp = 0;
     m->ne = 0;
     for (i = 0; i < nj; i++) m->eff_of_joint[i] = L->joints[i].type == AQS_JOINT_FIXED ? -1 : m->ne++;
+    m->nquat = 0;
+    for (i = 0; i < nj; i++) m->nquat += L->joints[i].type == AQS_JOINT_SPHERICAL || L->joints[i].type == AQS_JOINT_FREE;
     for (k = 0; k < nb; k++) {
         int32_t b = m->order[k];
         const joint_def *j = &L->joints[m->parent_joint[b]];

@@ -40,6 +40,11 @@ void stale_solve_done(aqs_linkage *L);
  * (refinable = 1), or it started and has not finished (0). */
 void stale_set_refinable(aqs_linkage *L, int refinable);
 
+/* Positions moved (all of them, or too many to follow): the assembly
+ * tree's internal poses no longer follow q; update_poses recomputes them
+ * when something reads them. */
+void stale_poses(aqs_linkage *L);
+
 /* A full update recomputes every load and the gravity term as well. */
 void stale_loads_all(aqs_linkage *L);
 
@@ -47,5 +52,6 @@ void stale_loads_all(aqs_linkage *L);
 void stale_gravity_fresh(aqs_linkage *L); /* update_loads: the world leaf's gravity term */
 void stale_loads_fresh(aqs_linkage *L);   /* update_loads: the composites' loads */
 void stale_tree_fresh(aqs_linkage *L);    /* update_coefficients: every marked node done */
+void stale_poses_fresh(aqs_linkage *L);   /* update_poses: every internal pose follows q */
 
 #endif

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "aba.h"
 #include "collide.h"
 #include "dca.h"
 #include "dense.h"
@@ -60,15 +61,31 @@ void update_all_poses(aqs_linkage *L)
 void update_poses_from_joint(aqs_linkage *L, int32_t e)
 {
     int32_t n = L->t.node_of_eff[e];
+    if (L->t.poses_stale) return; /* recomputed in full when read */
     for (; n >= 0; n = L->t.nodes[n].parent) update_node_poses(L, n);
 }
 
-void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P)
+void update_positions_moved(aqs_linkage *L)
+{
+    if (L->col) update_all_poses(L);
+    else stale_poses(L);
+    stale_positions(L, -1);
+}
+
+void update_poses(aqs_linkage *L)
+{
+    if (!L->t.poses_stale) return;
+    update_all_poses(L);
+    stale_poses_fresh(L);
+}
+
+void update_comp_pose_world(aqs_linkage *L, int32_t comp, pose *P)
 {
     const tree *t = &L->t;
     int32_t n, parent;
     pose_identity(P);
     if (comp == L->m.ncomp || t->nnodes == 0) return;
+    update_poses(L);
     /* Walk up: a B child's frame is its parent's frame times A's handle k
      * times J(q_k); an A child shares its parent's frame. */
     for (n = t->leaf_of_comp[comp]; (parent = t->nodes[n].parent) >= 0; n = parent) {
@@ -82,7 +99,7 @@ void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P)
     }
 }
 
-void update_body_pose_world(const aqs_linkage *L, int32_t body, pose *P)
+void update_body_pose_world(aqs_linkage *L, int32_t body, pose *P)
 {
     pose C;
     update_comp_pose_world(L, L->m.comp_of_body[body], &C);
@@ -170,7 +187,8 @@ void update_loads(aqs_linkage *L)
             m->comp_loaded[c] = 1;
             m->loaded_comps[m->nloaded_comps++] = c;
         }
-        update_comp_pose_world(L, c, &Pc);
+        if (L->aba.world_valid) aba_comp_world(L, c, &Pc); /* the exact solve's own sweep */
+        else update_comp_pose_world(L, c, &Pc);
         update_body_load_in_comp(L, b, &Pc, f);
         for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
     }
@@ -237,6 +255,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     aqs_status st = AQS_OK;
     int32_t k;
     if (t->nnodes == 0) return AQS_OK;
+    update_poses(L); /* left stale by moves since the last update */
     t->factors_updated = 0;
     if (t->all_dirty) {
         stale_loads_all(L);

@@ -13,13 +13,22 @@ void update_leaf_poses(aqs_linkage *L, int32_t n);
 void update_node_poses(aqs_linkage *L, int32_t n);
 /* All internal nodes' cross poses, children first. O(N). */
 void update_all_poses(aqs_linkage *L);
-/* Cross poses of the node of effective joint e and its ancestors. O(log N). */
+/* Cross poses of the node of effective joint e and its ancestors. O(log N).
+ * Nothing while every pose is stale (update_poses recomputes them all). */
 void update_poses_from_joint(aqs_linkage *L, int32_t e);
+/* Every position may have moved: the internal poses follow at once when
+ * collision shapes exist (their bounding spheres follow the poses), else
+ * they are left stale until update_poses; the coefficients and the
+ * world-frame loads are marked stale either way. */
+void update_positions_moved(aqs_linkage *L);
+/* The internal poses, recomputed if stale: before anything reads them (the
+ * DCA update, world poses through the tree, collision). O(N) when stale. */
+void update_poses(aqs_linkage *L);
 
 /* World pose of a composite's frame (world: identity), O(log N). */
-void update_comp_pose_world(const aqs_linkage *L, int32_t comp, pose *P);
+void update_comp_pose_world(aqs_linkage *L, int32_t comp, pose *P);
 /* World pose of a body, O(log N). */
-void update_body_pose_world(const aqs_linkage *L, int32_t body, pose *P);
+void update_body_pose_world(aqs_linkage *L, int32_t body, pose *P);
 /* World poses of all bodies, parents before children, O(N). */
 void update_all_body_poses_world(const aqs_linkage *L, pose *out);
 
