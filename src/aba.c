@@ -34,6 +34,12 @@
 #include "dense.h"
 #include "update.h"
 
+#ifdef __GNUC__
+#define ABA_INLINE static inline __attribute__((always_inline))
+#else
+#define ABA_INLINE static
+#endif
+
 /* Packed symmetric 6x6 [A B; B^T C]: offsets of A, B, C. */
 enum { PA = 0, PB = 6, PC = 15 };
 
@@ -75,10 +81,11 @@ aqs_status aba_alloc(aqs_linkage *L)
     a->node = lk_calloc(L, (size_t)m->ne + 1, sizeof(aba_node));
     a->pos_of_comp = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
     a->x = lk_calloc(L, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
+    a->need = lk_calloc(L, (size_t)m->ne + 1, 1);
     head = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
     next = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
     stack = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !head || !next || !stack) {
+    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !head || !next || !stack) {
         lk_free(L, head);
         lk_free(L, next);
         lk_free(L, stack);
@@ -137,6 +144,7 @@ void aba_free(aqs_linkage *L)
     lk_free(L, a->Um);
     lk_free(L, a->um);
     lk_free(L, a->x);
+    lk_free(L, a->need);
     memset(a, 0, sizeof *a);
 }
 
@@ -172,10 +180,39 @@ static void joint_pose(const aqs_linkage *L, const aba_joint *jt, pose *X)
     }
 }
 
+/* out = a b, written out (pose_compose). */
+ABA_INLINE void compose(const pose *a, const pose *b, pose *out)
+{
+    const double *A = a->R, *B = b->R;
+    int i;
+    for (i = 0; i < 3; i++) {
+        const double r0 = A[3 * i], r1 = A[3 * i + 1], r2 = A[3 * i + 2];
+        out->R[3 * i] = r0 * B[0] + r1 * B[3] + r2 * B[6];
+        out->R[3 * i + 1] = r0 * B[1] + r1 * B[4] + r2 * B[7];
+        out->R[3 * i + 2] = r0 * B[2] + r1 * B[5] + r2 * B[8];
+        out->p[i] = a->p[i] + r0 * b->p[0] + r1 * b->p[1] + r2 * b->p[2];
+    }
+}
+
+/* Mark the positions whose world pose the loads need: every loaded
+ * composite and its ancestors (each path stops at a marked one). */
+static void mark_world(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    const model *m = &L->m;
+    int32_t i;
+    for (i = 0; i < L->nloaded; i++) {
+        int32_t c = m->comp_of_body[L->loaded_bodies[i]], k;
+        if (c == m->ncomp) continue;
+        for (k = a->pos_of_comp[c]; k >= 0 && !a->need[k]; k = a->joint[k].parent) a->need[k] = 1;
+    }
+}
+
 /* Forward sweep over the positions: each composite's pose in its parent,
  * its own inertia as the start of its articulated inertia, pA = 0 (the
- * children add to both), and with world set the world poses too. */
-static void pose_pass(aqs_linkage *L, int world)
+ * children add to both), and the world poses of the marked positions
+ * (clearing the marks). */
+static void pose_pass(aqs_linkage *L)
 {
     aba_state *a = &L->aba;
     int32_t k, ne = L->m.ne;
@@ -185,15 +222,16 @@ static void pose_pass(aqs_linkage *L, int world)
         joint_pose(L, jt, &nd->X);
         memcpy(nd->IA, jt->I, sizeof nd->IA);
         memset(nd->pA, 0, sizeof nd->pA);
-        if (world) {
+        if (a->need[k]) {
+            a->need[k] = 0;
             if (jt->parent < 0) nd->v.world = nd->X;
-            else pose_compose(&a->node[jt->parent].v.world, &nd->X, &nd->v.world);
+            else compose(&a->node[jt->parent].v.world, &nd->X, &nd->v.world);
         }
     }
 }
 
 /* out += R S R^T for packed symmetric 3x3 S (xx xy xz yy yz zz), R row-major. */
-static inline void rot_sym(const double *R, const double *S, double *o)
+ABA_INLINE void rot_sym(const double *R, const double *S, double *o)
 {
     /* T = S R^T (3x3): T_ij = sum_k S_ik R_jk */
     const double s00 = S[0], s01 = S[1], s02 = S[2], s11 = S[3], s12 = S[4], s22 = S[5];
@@ -214,7 +252,7 @@ static inline void rot_sym(const double *R, const double *S, double *o)
 }
 
 /* o = R B R^T for a full 3x3 B. */
-static inline void rot_full(const double *R, const double *B, double *o)
+ABA_INLINE void rot_full(const double *R, const double *B, double *o)
 {
     double T[9];
     int i, j;
@@ -224,7 +262,7 @@ static inline void rot_full(const double *R, const double *B, double *o)
         for (j = 0; j < 3; j++) o[3 * i + j] = R[3 * i] * T[j] + R[3 * i + 1] * T[3 + j] + R[3 * i + 2] * T[6 + j];
 }
 
-static inline void cross(const double *a, double b0, double b1, double b2, double *o)
+ABA_INLINE void cross(const double *a, double b0, double b1, double b2, double *o)
 {
     o[0] = a[1] * b2 - a[2] * b1;
     o[1] = a[2] * b0 - a[0] * b2;
@@ -265,7 +303,7 @@ static void inertia_to_parent_add(const pose *P, const double *IF, double *IG)
 }
 
 /* pG += X^T f: [R n + p x (R f); R f]. */
-static inline void force_to_parent_add(const pose *P, const double *f, double *g)
+ABA_INLINE void force_to_parent_add(const pose *P, const double *f, double *g)
 {
     const double *R = P->R, *p = P->p;
     double l0 = R[0] * f[3] + R[1] * f[4] + R[2] * f[5];
@@ -279,8 +317,23 @@ static inline void force_to_parent_add(const pose *P, const double *f, double *g
     g[5] += l2;
 }
 
+/* o = X v, v in the parent's frame: [R^T w; R^T (v - p x w)]. */
+ABA_INLINE void motion_from_parent(const pose *P, const double *v, double *o)
+{
+    const double *R = P->R, *p = P->p;
+    const double t0 = v[3] - (p[1] * v[2] - p[2] * v[1]);
+    const double t1 = v[4] - (p[2] * v[0] - p[0] * v[2]);
+    const double t2 = v[5] - (p[0] * v[1] - p[1] * v[0]);
+    o[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
+    o[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
+    o[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
+    o[3] = R[0] * t0 + R[3] * t1 + R[6] * t2;
+    o[4] = R[1] * t0 + R[4] * t1 + R[7] * t2;
+    o[5] = R[2] * t0 + R[5] * t1 + R[8] * t2;
+}
+
 /* o = I v for packed I. */
-static inline void inertia_mul(const double *I, const double *v, double *o)
+ABA_INLINE void inertia_mul(const double *I, const double *v, double *o)
 {
     const double *A = I + PA, *B = I + PB, *C = I + PC;
     o[0] = A[0] * v[0] + A[1] * v[1] + A[2] * v[2] + B[0] * v[3] + B[1] * v[4] + B[2] * v[5];
@@ -487,7 +540,7 @@ static void forward(aqs_linkage *L)
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
         double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
-        spatial_xform_motion(&nd->X, ap, ac); /* a' = X a_p */
+        motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             const double *U = nd->v.s.U, *x = jt->axis;
             double qdd = (nd->u - (U[0] * ac[0] + U[1] * ac[1] + U[2] * ac[2] + U[3] * ac[3] + U[4] * ac[4] +
@@ -545,7 +598,8 @@ aqs_status aba_solve(aqs_linkage *L)
     /* World poses for the loads: from the sweep when the tree's are stale
      * (the tree's take O(log N) per loaded body when current). */
     int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
-    pose_pass(L, world);
+    if (world) mark_world(L);
+    pose_pass(L);
     L->aba.world_valid = world;
     update_loads(L); /* the composites' loads in their frames */
     L->aba.world_valid = 0;

@@ -193,6 +193,8 @@ typedef struct {
     double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
     double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
+    unsigned char *need; /* ne: the position's world pose is needed (a loaded composite or an
+                            ancestor of one); set before a pose sweep, cleared by it */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
 } aba_state;
 
