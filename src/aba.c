@@ -153,6 +153,23 @@ void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P)
     *P = L->aba.node[L->aba.pos_of_comp[comp]].v.world;
 }
 
+void aba_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P)
+{
+    const aba_state *a = &L->aba;
+    int32_t k;
+    if (comp == L->m.ncomp) {
+        pose_identity(P);
+        return;
+    }
+    k = a->pos_of_comp[comp];
+    *P = a->node[k].X;
+    for (k = a->joint[k].parent; k >= 0; k = a->joint[k].parent) {
+        pose t;
+        pose_compose(&a->node[k].X, P, &t);
+        *P = t;
+    }
+}
+
 /* X: the composite's frame in its parent's, the joint placement composed
  * with J(q). Revolute and prismatic joints written out. */
 static void joint_pose(const aqs_linkage *L, const aba_joint *jt, pose *X)
@@ -605,7 +622,9 @@ aqs_status aba_solve(aqs_linkage *L)
     L->aba.world_valid = 0;
     if ((st = backward(L)) != AQS_OK) return st;
     forward(L);
+    L->aba.x_valid = 1;
     welded_forces(L);
+    L->aba.x_valid = 0;
     adaptive_mark_exact(L);
     L->t.nodes_updated = 0;
     L->t.factors_updated = 0;

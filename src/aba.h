@@ -18,5 +18,8 @@ aqs_status aba_solve(aqs_linkage *L);
 /* The world pose of a composite's frame from the solve's own pose sweep:
  * valid only while L->aba.world_valid (update_loads inside aba_solve). */
 void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
+/* The same by composing the solve's poses up the kinematic tree, O(depth):
+ * valid only while L->aba.x_valid (the welded bodies' loads in aba_solve). */
+void aba_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P);
 
 #endif

@@ -196,6 +196,7 @@ typedef struct {
     unsigned char *need; /* ne: the position's world pose is needed (a loaded composite or an
                             ancestor of one); set before a pose sweep, cleared by it */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
+    int x_valid;      /* node[].X follow q (inside aba_solve, after its pose sweep) */
 } aba_state;
 
 struct aqs_linkage {

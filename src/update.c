@@ -83,6 +83,10 @@ void update_comp_pose_world(aqs_linkage *L, int32_t comp, pose *P)
 {
     const tree *t = &L->t;
     int32_t n, parent;
+    if (L->aba.x_valid && t->poses_stale) { /* inside an exact solve: its own poses */
+        aba_comp_world_walk(L, comp, P);
+        return;
+    }
     pose_identity(P);
     if (comp == L->m.ncomp || t->nnodes == 0) return;
     update_poses(L);
