@@ -32,6 +32,7 @@
 #include "adaptive.h"
 #include "dca.h"
 #include "dense.h"
+#include "invariant.h"
 #include "update.h"
 
 #ifdef __GNUC__
@@ -153,19 +154,44 @@ void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P)
     *P = L->aba.node[L->aba.pos_of_comp[comp]].v.world;
 }
 
+static void joint_pose(const aqs_linkage *L, const aba_joint *jt, pose *X);
+
+void aba_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36])
+{
+    unpack_inertia(L->aba.joint[L->aba.pos_of_comp[comp]].I, I);
+}
+
+void aba_world_poses(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    for (k = 0; k < L->m.ne; k++) {
+        const aba_joint *jt = &a->joint[k];
+        pose X;
+        joint_pose(L, jt, &X);
+        if (jt->parent < 0) a->node[k].v.world = X;
+        else pose_compose(&a->node[jt->parent].v.world, &X, &a->node[k].v.world);
+    }
+}
+
+void aba_body_world(const aqs_linkage *L, int32_t body, pose *P)
+{
+    const model *m = &L->m;
+    int32_t c = m->comp_of_body[body];
+    if (c == m->ncomp) *P = m->body_in_comp[body]; /* welded to the world: its pose there */
+    else pose_compose(&L->aba.node[L->aba.pos_of_comp[c]].v.world, &m->body_in_comp[body], P);
+}
+
 void aba_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P)
 {
     const aba_state *a = &L->aba;
     int32_t k;
-    if (comp == L->m.ncomp) {
-        pose_identity(P);
-        return;
-    }
-    k = a->pos_of_comp[comp];
-    *P = a->node[k].X;
-    for (k = a->joint[k].parent; k >= 0; k = a->joint[k].parent) {
-        pose t;
-        pose_compose(&a->node[k].X, P, &t);
+    pose_identity(P);
+    if (comp == L->m.ncomp) return;
+    for (k = a->pos_of_comp[comp]; k >= 0; k = a->joint[k].parent) {
+        pose X, t;
+        joint_pose(L, &a->joint[k], &X);
+        pose_compose(&X, P, &t);
         *P = t;
     }
 }
@@ -585,6 +611,8 @@ static void welded_forces(aqs_linkage *L)
     const model *m = &L->m;
     const tree *t = &L->t;
     int32_t c, h, i;
+    if (m->nwelded == 0) return;
+    AQS_ASSERT(t->poses != NULL); /* the leaves' handle poses: allocated at finalize */
     for (c = 0; c <= m->ncomp; c++) {
         const node *leaf;
         double *x;

@@ -18,8 +18,15 @@ aqs_status aba_solve(aqs_linkage *L);
 /* The world pose of a composite's frame from the solve's own pose sweep:
  * valid only while L->aba.world_valid (update_loads inside aba_solve). */
 void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
-/* The same by composing the solve's poses up the kinematic tree, O(depth):
- * valid only while L->aba.x_valid (the welded bodies' loads in aba_solve). */
+/* The spatial inertia of a composite (its frame, 6x6) from the solver's
+ * packed copy. */
+void aba_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36]);
+/* Every composite's world pose at the current positions into the solver's
+ * scratch (valid until the next solve), then aba_body_world per body. */
+void aba_world_poses(aqs_linkage *L);
+void aba_body_world(const aqs_linkage *L, int32_t body, pose *P);
+/* The world pose of a composite's frame from the positions, composing the
+ * joints' poses up the kinematic tree: O(depth), no tree poses read. */
 void aba_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P);
 
 #endif

@@ -143,9 +143,7 @@ static void free_solver(aqs_linkage *L)
     lk_free(L, L->cforce);
     lk_free(L, L->q_saved);
     lk_free(L, L->welded_acc);
-    lk_free(L, L->body_world);
     L->qdd = L->cforce = L->q_saved = L->welded_acc = NULL;
-    L->body_world = NULL;
 }
 
 AQS_API void aqs_linkage_destroy(aqs_linkage *L)
@@ -408,7 +406,6 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
 {
     static const char fn[] = "aqs_linkage_finalize";
     aqs_status st;
-    int32_t n;
     CHECK_LINKAGE(L);
     if ((st = need_building(L, fn)) != AQS_OK) return st;
     if ((st = model_build(L)) != AQS_OK) return st;
@@ -419,16 +416,21 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     L->qdd = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
     L->cforce = lk_calloc(L, 6 * (size_t)L->njoints + 1, sizeof(double));
     L->q_saved = lk_calloc(L, (size_t)L->nq + 1, sizeof(double));
-    L->welded_acc = lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double));
-    L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
-    if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world ||
-        adaptive_alloc(L) != AQS_OK || aba_alloc(L) != AQS_OK) {
+    /* welded bodies' forces: their accelerations, the inverse inertias */
+    L->welded_acc = L->m.nwelded ? lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double)) : NULL;
+    if (!L->qdd || !L->cforce || !L->q_saved || (L->m.nwelded && !L->welded_acc) ||
+        adaptive_alloc(L) != AQS_OK || aba_alloc(L) != AQS_OK || (L->m.nwelded && model_inverse_alloc(L) != AQS_OK)) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
-    for (n = 0; n < L->t.nnodes; n++)
-        if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
-    update_all_poses(L);
+    /* The tree's poses when collision needs them at once, or the leaves'
+     * (welded bodies' forces after an exact solve); otherwise when a setter
+     * first chooses the DCA or a tolerance (dca_enable) or a shape is added. */
+    if ((L->col && update_poses(L) != AQS_OK) || (L->m.nwelded > 0 && update_poses_alloc(L) != AQS_OK)) {
+        free_solver(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
+    }
+    model_drop_inertia(L); /* the articulated-body solver has it, packed */
     stale_tree(L);
     /* The DCA coefficients only when the DCA is the exact solver, or when
      * nothing can move (no tree node: the solve takes the DCA path, and its
@@ -1126,7 +1128,11 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, doubl
     CHECK_PTR(L, fn, poses);
     if (n < 7 * (size_t)L->nbodies)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);
-    update_all_body_poses_world(L, L->body_world);
-    for (b = 0; b < L->nbodies; b++) write_pose(&L->body_world[b], poses + 7 * b, poses + 7 * b + 3);
+    aba_world_poses(L); /* the composites', in the exact solver's scratch */
+    for (b = 0; b < L->nbodies; b++) {
+        pose P;
+        aba_body_world(L, b, &P);
+        write_pose(&P, poses + 7 * b, poses + 7 * b + 3);
+    }
     return AQS_OK;
 }

@@ -19,7 +19,11 @@ static collision *collide_state(aqs_linkage *L)
         if (!L->col) return NULL;
         L->col->world_group = 1u;
         L->col->world_mask = 0xFFFFFFFFu;
-        update_poses(L); /* from now on the tree's poses follow every move */
+        if (update_poses(L) != AQS_OK) { /* from now on the tree's poses follow every move */
+            lk_free(L, L->col);
+            L->col = NULL;
+            return NULL;
+        }
     }
     return L->col;
 }

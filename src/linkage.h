@@ -95,8 +95,9 @@ typedef struct {
     int32_t *comp_of_body;  /* nbodies */
     pose *body_in_comp;     /* nbodies: body frame in its composite's frame */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
-    double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame */
-    double *comp_inverse;   /* ncomp x 36 */
+    double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
+                               finalize (aba_comp_inertia has it, packed) */
+    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc */
     double *comp_force;     /* (ncomp + 1) x 6: external load, composite frame */
     unsigned char *comp_loaded; /* ncomp + 1 */
     int32_t *loaded_comps;  /* comps whose comp_force is non-zero */
@@ -196,7 +197,8 @@ typedef struct {
     unsigned char *need; /* ne: the position's world pose is needed (a loaded composite or an
                             ancestor of one); set before a pose sweep, cleared by it */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
-    int x_valid;      /* node[].X follow q (inside aba_solve, after its pose sweep) */
+    int x_valid;      /* inside aba_solve after its pose sweep: world poses by walking up
+                         (aba_comp_world_walk) rather than refreshing stale tree poses */
 } aba_state;
 
 struct aqs_linkage {
@@ -239,7 +241,6 @@ struct aqs_linkage {
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */
     aba_state aba;
-    pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;

@@ -72,24 +72,43 @@ void update_positions_moved(aqs_linkage *L)
     stale_positions(L, -1);
 }
 
-void update_poses(aqs_linkage *L)
+aqs_status update_poses_alloc(aqs_linkage *L)
 {
-    if (!L->t.poses_stale) return;
+    tree *t = &L->t;
+    int32_t n;
+    if (t->poses || t->nnodes == 0) return AQS_OK;
+    t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
+    if (!t->poses)
+        return lk_fail(L, AQS_ENOMEM, "out of memory for the assembly tree's %lld poses", (long long)t->nposes);
+    for (n = 0; n < t->nnodes; n++)
+        if (t->nodes[n].joint < 0) update_leaf_poses(L, n);
+    stale_poses(L);
+    return AQS_OK;
+}
+
+aqs_status update_poses(aqs_linkage *L)
+{
+    aqs_status st;
+    if (!L->t.poses_stale) return AQS_OK;
+    if ((st = update_poses_alloc(L)) != AQS_OK) return st;
     update_all_poses(L);
     stale_poses_fresh(L);
+    return AQS_OK;
 }
 
 void update_comp_pose_world(aqs_linkage *L, int32_t comp, pose *P)
 {
     const tree *t = &L->t;
     int32_t n, parent;
-    if (L->aba.x_valid && t->poses_stale) { /* inside an exact solve: its own poses */
+    if (t->poses_stale && (!t->poses || L->aba.x_valid)) {
+        /* no tree poses (never needed so far), or inside an exact solve:
+         * up the kinematic tree from the positions, O(depth) */
         aba_comp_world_walk(L, comp, P);
         return;
     }
     pose_identity(P);
     if (comp == L->m.ncomp || t->nnodes == 0) return;
-    update_poses(L);
+    (void)update_poses(L); /* allocated: only recomputes (no failure) */
     /* Walk up: a B child's frame is its parent's frame times A's handle k
      * times J(q_k); an A child shares its parent's frame. */
     for (n = t->leaf_of_comp[comp]; (parent = t->nodes[n].parent) >= 0; n = parent) {
@@ -108,21 +127,6 @@ void update_body_pose_world(aqs_linkage *L, int32_t body, pose *P)
     pose C;
     update_comp_pose_world(L, L->m.comp_of_body[body], &C);
     pose_compose(&C, &L->m.body_in_comp[body], P);
-}
-
-void update_all_body_poses_world(const aqs_linkage *L, pose *out)
-{
-    int32_t k;
-    for (k = 0; k < L->nbodies; k++) {
-        int32_t b = L->m.order[k];
-        const joint_def *jd = &L->joints[L->m.parent_joint[b]];
-        pose place, J, jp;
-        pose_from_quat(jd->pos, jd->quat, &place);
-        joint_child_pose(jd, L->q + jd->qoff, &J);
-        pose_compose(&place, &J, &jp);
-        if (jd->parent == AQS_WORLD) out[b] = jp;
-        else pose_compose(&out[jd->parent], &jp, &out[b]);
-    }
 }
 
 void update_body_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
@@ -259,7 +263,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     aqs_status st = AQS_OK;
     int32_t k;
     if (t->nnodes == 0) return AQS_OK;
-    update_poses(L); /* left stale by moves since the last update */
+    if ((st = update_poses(L)) != AQS_OK) return st; /* left stale by moves since the last update */
     t->factors_updated = 0;
     if (t->all_dirty) {
         stale_loads_all(L);

@@ -21,16 +21,22 @@ void update_poses_from_joint(aqs_linkage *L, int32_t e);
  * they are left stale until update_poses; the coefficients and the
  * world-frame loads are marked stale either way. */
 void update_positions_moved(aqs_linkage *L);
-/* The internal poses, recomputed if stale: before anything reads them (the
- * DCA update, world poses through the tree, collision). O(N) when stale. */
-void update_poses(aqs_linkage *L);
+/* The tree's poses exist (allocated on first use, O(N) memory: an exact
+ * solve by the articulated-body algorithm never reads the internal ones)
+ * with every leaf's set (constant); the internal ones may be stale. AQS_OK
+ * or AQS_ENOMEM (message set, nothing changed). */
+aqs_status update_poses_alloc(aqs_linkage *L);
+/* The internal poses too, recomputed if stale: before anything reads them
+ * (the DCA update, world poses through the tree, collision). O(N) when
+ * stale. AQS_OK or AQS_ENOMEM (from update_poses_alloc). */
+aqs_status update_poses(aqs_linkage *L);
 
-/* World pose of a composite's frame (world: identity), O(log N). */
+/* World pose of a composite's frame (world: identity), O(log N) through
+ * the tree's poses (recomputed first if stale: O(N) once); O(depth) up the
+ * kinematic tree when the tree holds no poses, or inside an exact solve. */
 void update_comp_pose_world(aqs_linkage *L, int32_t comp, pose *P);
 /* World pose of a body, O(log N). */
 void update_body_pose_world(aqs_linkage *L, int32_t body, pose *P);
-/* World poses of all bodies, parents before children, O(N). */
-void update_all_body_poses_world(const aqs_linkage *L, pose *out);
 
 /* The load of a body as a spatial force in its composite's frame, given the
  * composite's world pose. */
