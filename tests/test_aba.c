@@ -403,6 +403,57 @@ static void test_lazy_tree_poses(void **state)
     aqs_linkage_destroy(D);
 }
 
+/* Without welded bodies, shapes, a tolerance or the DCA the tree never holds
+ * poses: a world-pose query walks up the kinematic tree and agrees with
+ * the tree's answer on a twin linkage that has a tolerance (its poses through
+ * the assembly tree), and with the all-bodies pass. */
+static void test_no_tree_poses(void **state)
+{
+    aqs_linkage *L[2];
+    int s, i, n = 40;
+    uint64_t rng = 5;
+    double worst = 0.0;
+    (void)state;
+    for (s = 0; s < 2; s++) {
+        uint64_t r = rng;
+        L[s] = test_new_linkage();
+        for (i = 0; i < n; i++) test_add_body(L[s], 1.0 + 0.05 * i, 0.3, 0.02, -0.01, 0.1);
+        for (i = 0; i < n; i++) {
+            int32_t parent = i ? (int32_t)test_uniform(&r, i / 2.0, i) : AQS_WORLD;
+            int32_t type = i % 5 == 3 ? AQS_JOINT_SPHERICAL : i % 3 == 1 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE;
+            test_add_joint(L[s], type, parent, i, i ? test_uniform(&r, -0.8, 0.8) : 0.0, test_uniform(&r, -0.5, 0.5),
+                           0.2, test_uniform(&r, -1, 1), test_uniform(&r, -1, 1), 1.0);
+        }
+        assert_int_equal(aqs_linkage_finalize(L[s]), AQS_OK);
+        if (s) assert_int_equal(aqs_linkage_set_tolerance(L[s], AQS_METRIC_REL_JOINT, ldexp(1.0, -20)), AQS_OK);
+        for (i = 0; i < 4; i++) assert_int_equal(aqs_linkage_step(L[s], 0.05), AQS_OK);
+    }
+    assert_null(L[0]->t.poses);
+    assert_non_null(L[1]->t.poses);
+    {   /* the same positions on both (the adaptive steps moved the twin differently) */
+        int32_t nq;
+        double *q;
+        assert_int_equal(aqs_linkage_get_sizes(L[0], NULL, NULL, &nq, NULL), AQS_OK);
+        q = malloc(sizeof(double) * (size_t)nq);
+        assert_int_equal(aqs_linkage_get_positions(L[0], q, (size_t)nq), AQS_OK);
+        assert_int_equal(aqs_linkage_set_positions(L[1], q, (size_t)nq), AQS_OK);
+        free(q);
+    }
+    for (i = 0; i < n; i++) {
+        double p0[3], q0[4], p1[3], q1[4], dot = 0.0;
+        int k;
+        assert_int_equal(aqs_body_get_pose_world(L[0], i, p0, q0), AQS_OK);
+        assert_int_equal(aqs_body_get_pose_world(L[1], i, p1, q1), AQS_OK);
+        for (k = 0; k < 4; k++) dot += q0[k] * q1[k];
+        for (k = 0; k < 3; k++) worst = fmax(worst, fabs(p0[k] - p1[k]));
+        for (k = 0; k < 4; k++) worst = fmax(worst, fabs((dot < 0 ? -q0[k] : q0[k]) - q1[k]));
+    }
+    assert_true(worst <= 1e-12);
+    assert_true(pose_paths_differ(L[0]) <= 1e-12);
+    assert_null(L[0]->t.poses); /* reading allocated nothing */
+    for (s = 0; s < 2; s++) aqs_linkage_destroy(L[s]);
+}
+
 /* A chain whose bodies and joints are numbered against the kinematic order
  * (the root is the last body, each joint's parent has the higher index):
  * the articulated-body order is depth first whatever the numbering, and
@@ -478,6 +529,7 @@ int main(void)
         cmocka_unit_test(test_exact_solver_errors),
         cmocka_unit_test(test_dca_coefficients_on_demand),
         cmocka_unit_test(test_lazy_tree_poses),
+        cmocka_unit_test(test_no_tree_poses),
         cmocka_unit_test(test_reverse_numbered_chain),
         cmocka_unit_test(test_set_positions_refused),
     };
