@@ -404,9 +404,10 @@ static void test_lazy_tree_poses(void **state)
 }
 
 /* Without welded bodies, shapes, a tolerance or the DCA the tree never holds
- * poses: a world-pose query walks up the kinematic tree and agrees with
- * the tree's answer on a twin linkage that has a tolerance (its poses through
- * the assembly tree), and with the all-bodies pass. */
+ * poses: a world-pose query walks up the kinematic tree and agrees, at
+ * random positions, with the tree's answer on a twin linkage that has a
+ * tolerance (its poses through the assembly tree), and with the all-bodies
+ * pass. */
 static void test_no_tree_poses(void **state)
 {
     aqs_linkage *L[2];
@@ -430,13 +431,18 @@ static void test_no_tree_poses(void **state)
     }
     assert_null(L[0]->t.poses);
     assert_non_null(L[1]->t.poses);
-    {   /* the same positions on both (the adaptive steps moved the twin differently) */
-        int32_t nq;
+    {   /* the same random positions on both */
+        int32_t nq, off, m;
         double *q;
         assert_int_equal(aqs_linkage_get_sizes(L[0], NULL, NULL, &nq, NULL), AQS_OK);
         q = malloc(sizeof(double) * (size_t)nq);
-        assert_int_equal(aqs_linkage_get_positions(L[0], q, (size_t)nq), AQS_OK);
-        assert_int_equal(aqs_linkage_set_positions(L[1], q, (size_t)nq), AQS_OK);
+        for (i = 0; i < n; i++) {
+            int k;
+            assert_int_equal(aqs_joint_get_layout(L[0], i, &off, &m, NULL, NULL), AQS_OK);
+            if (m == 4) test_random_quat(&rng, q + off);
+            else for (k = 0; k < m; k++) q[off + k] = test_uniform(&rng, -1.5, 1.5);
+        }
+        for (s = 0; s < 2; s++) assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)nq), AQS_OK);
         free(q);
     }
     for (i = 0; i < n; i++) {
