@@ -402,6 +402,67 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
     return AQS_OK;
 }
 
+/* An array of used elements shrunk to exactly that many (the building
+ * arrays grow geometrically). 0, or -1 when the copy cannot be had (the
+ * array is left as it is). */
+static int shrink(aqs_linkage *L, void **arr, size_t used, size_t elem, int32_t *cap)
+{
+    void *p;
+    if (!*arr || used == 0 || used >= (size_t)*cap) return 0;
+    p = lk_alloc(L, used * elem);
+    if (!p) return -1;
+    memcpy(p, *arr, used * elem);
+    lk_free(L, *arr);
+    *arr = p;
+    *cap = (int32_t)used;
+    return 0;
+}
+
+/* Release the unused capacity of the body, joint, position and force arrays
+ * (up to half of them after geometric growth). 0, or -1 when out of memory
+ * (the contents are unchanged either way). */
+static int shrink_building_arrays(aqs_linkage *L)
+{
+    size_t nb = (size_t)L->nbodies;
+    int32_t c;
+    void *p;
+    if (L->body_cap > L->nbodies && L->nbodies > 0) {
+        body_def *b = lk_alloc(L, nb * sizeof *b);
+        body_load *ld = lk_alloc(L, nb * sizeof *ld);
+        int32_t *slot = lk_alloc(L, nb * sizeof *slot), *list = lk_alloc(L, nb * sizeof *list);
+        if (!b || !ld || !slot || !list) {
+            lk_free(L, b);
+            lk_free(L, ld);
+            lk_free(L, slot);
+            lk_free(L, list);
+            return -1;
+        }
+        memcpy(b, L->bodies, nb * sizeof *b);
+        memcpy(ld, L->loads, nb * sizeof *ld);
+        memcpy(slot, L->load_slot, nb * sizeof *slot);
+        if (L->nloaded) memcpy(list, L->loaded_bodies, (size_t)L->nloaded * sizeof *list);
+        lk_free(L, L->bodies);
+        lk_free(L, L->loads);
+        lk_free(L, L->load_slot);
+        lk_free(L, L->loaded_bodies);
+        L->bodies = b;
+        L->loads = ld;
+        L->load_slot = slot;
+        L->loaded_bodies = list;
+        L->body_cap = L->nbodies;
+    }
+    p = L->joints;
+    if (shrink(L, &p, (size_t)L->njoints, sizeof *L->joints, &L->joint_cap)) return -1;
+    L->joints = p;
+    p = L->q, c = L->q_cap;
+    if (shrink(L, &p, (size_t)L->nq, sizeof *L->q, &c)) return -1;
+    L->q = p, L->q_cap = c;
+    p = L->tau, c = L->v_cap;
+    if (shrink(L, &p, (size_t)L->nv, sizeof *L->tau, &c)) return -1;
+    L->tau = p, L->v_cap = c;
+    return 0;
+}
+
 AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
 {
     static const char fn[] = "aqs_linkage_finalize";
@@ -426,7 +487,8 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     /* The tree's poses when collision needs them at once, or the leaves'
      * (welded bodies' forces after an exact solve); otherwise when a setter
      * first chooses the DCA or a tolerance (dca_enable) or a shape is added. */
-    if ((L->col && update_poses(L) != AQS_OK) || (L->m.nwelded > 0 && update_poses_alloc(L) != AQS_OK)) {
+    if ((L->col && update_poses(L) != AQS_OK) || (L->m.nwelded > 0 && update_poses_alloc(L) != AQS_OK) ||
+        shrink_building_arrays(L) != 0) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
