@@ -161,6 +161,11 @@ void aba_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36])
     unpack_inertia(L->aba.joint[L->aba.pos_of_comp[comp]].I, I);
 }
 
+const pose *aba_eff_place(const aqs_linkage *L, int32_t e)
+{
+    return &L->aba.joint[L->aba.pos_of_comp[L->m.eff_child[e]]].place;
+}
+
 void aba_world_poses(aqs_linkage *L)
 {
     aba_state *a = &L->aba;

@@ -21,6 +21,8 @@ void aba_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
 /* The spatial inertia of a composite (its frame, 6x6) from the solver's
  * packed copy. */
 void aba_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36]);
+/* The joint frame of effective joint e in its parent composite's frame. */
+const pose *aba_eff_place(const aqs_linkage *L, int32_t e);
 /* Every composite's world pose at the current positions into the solver's
  * scratch (valid until the next solve), then aba_body_world per body. */
 void aba_world_poses(aqs_linkage *L);

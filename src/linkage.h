@@ -107,7 +107,8 @@ typedef struct {
     int32_t *eff_of_joint;  /* njoints: effective index or -1 for fixed joints */
     int32_t *eff_parent;    /* ne: parent composite (ncomp = world) */
     int32_t *eff_child;     /* ne: child composite */
-    pose *eff_place;        /* ne: joint frame in the parent composite's frame */
+    pose *eff_place;        /* ne: joint frame in the parent composite's frame; NULL after
+                               finalize (aba_eff_place has it) */
     int32_t *parent_joint;  /* nbodies: the joint whose child the body is */
     int32_t *order;         /* nbodies: parents before children */
     int32_t nwelded;        /* bodies that are not the root of their composite */

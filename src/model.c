@@ -196,7 +196,9 @@ aqs_status model_inverse_alloc(aqs_linkage *L)
 void model_drop_inertia(aqs_linkage *L)
 {
     lk_free(L, L->m.comp_inertia);
+    lk_free(L, L->m.eff_place);
     L->m.comp_inertia = NULL;
+    L->m.eff_place = NULL;
 }
 
 void model_free(aqs_linkage *L)

@@ -16,8 +16,8 @@ void model_free(aqs_linkage *L);
  * when first needed: the DCA (dca_enable) and welded bodies (finalize).
  * AQS_OK or AQS_ENOMEM (nothing changed). */
 aqs_status model_inverse_alloc(aqs_linkage *L);
-/* Release comp_inertia after finalize: the articulated-body solver keeps
- * the composites' inertias packed in its own order (aba_comp_inertia). */
+/* Release comp_inertia and eff_place after finalize: the articulated-body
+ * solver keeps both in its own order (aba_comp_inertia, aba_eff_place). */
 void model_drop_inertia(aqs_linkage *L);
 /* Spatial inertia of a body about its own origin, body frame. */
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36]);

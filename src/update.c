@@ -20,7 +20,7 @@ void update_leaf_poses(aqs_linkage *L, int32_t n)
     for (i = 0; i < nd->nh; i++) {
         int32_t e = t->handles[nd->handles + i];
         if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
-        else P[i] = L->m.eff_place[e];                             /* holds e up: joint frame */
+        else P[i] = *aba_eff_place(L, e);                          /* holds e up: joint frame */
     }
 }
 
