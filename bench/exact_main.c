@@ -6,6 +6,7 @@
  *
  *   exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K]
  *              [--gravity] [--tolerance]
+ *   exact_main --bandwidth MB
  *
  * Each linkage gets one force (1 N at the centre of mass of a seeded body,
  * seeded direction; gravity off unless --gravity). Every pass sets the
@@ -17,6 +18,10 @@
  * solve (peak and current), divided by the joints; --tolerance sets rel_joint
  * 2^-19 on the linkages first (the adaptive solver's storage) but still
  * solves exactly by aqs_linkage_set_tolerance(..., 0) after.
+ *
+ * --bandwidth MB: the single-core streaming read bandwidth, the floor of a
+ * pass over memory: MB megabytes of doubles summed with 4 accumulators, 7
+ * times; prints the median and best GB/s.
  *
  * Instruction counts: run one size under callgrind with
  *   valgrind --tool=callgrind --toggle-collect=bench_exact_pass \
@@ -124,6 +129,32 @@ static void positions(item *it, int scene, int k)
     for (i = lo; i < it->nq; i++) it->q[i] += 1e-3 * sin((double)i + 0.7 * k);
 }
 
+static int bandwidth(long mb)
+{
+    size_t n = (size_t)mb * 1000000 / sizeof(double), i;
+    double *x = (double *)malloc(n * sizeof(double)), gbs[7], best = 0.0, sink = 0.0;
+    int r;
+    if (!x) return fail(NULL, "malloc");
+    for (i = 0; i < n; i++) x[i] = (double)(i & 1023);
+    for (r = 0; r < 7; r++) {
+        double s0 = 0, s1 = 0, s2 = 0, s3 = 0, t0 = bench_now(), t;
+        for (i = 0; i + 4 <= n; i += 4) {
+            s0 += x[i];
+            s1 += x[i + 1];
+            s2 += x[i + 2];
+            s3 += x[i + 3];
+        }
+        t = bench_now() - t0;
+        sink += s0 + s1 + s2 + s3;
+        gbs[r] = (double)(n * sizeof(double)) / t * 1e-9;
+        if (gbs[r] > best) best = gbs[r];
+    }
+    printf("streaming read of %ld MB, one core: median %.1f GB/s, best %.1f GB/s (checksum %g)\n", mb,
+           bench_median(gbs, 7), best, sink);
+    free(x);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int scene = BENCH_SCENE_MOLECULE, rounds = 5, reps = 5, gravity = 0, tolerance = 0;
@@ -145,6 +176,8 @@ int main(int argc, char **argv)
             rounds = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--reps") && a + 1 < argc) {
             reps = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--bandwidth") && a + 1 < argc) {
+            return bandwidth(atol(argv[++a]));
         } else if (!strcmp(argv[a], "--gravity")) {
             gravity = 1;
         } else if (!strcmp(argv[a], "--tolerance")) {

@@ -70,6 +70,7 @@ static void unpack_inertia(const double *P, double *F)
         for (j = 0; j < 3; j++) F[6 * i + 3 + j] = F[6 * (3 + j) + i] = P[PB + 3 * i + j];
 }
 
+
 /* Build the ABA order (depth first from the world, children by effective
  * index) and the per-joint constants. */
 aqs_status aba_alloc(aqs_linkage *L)
@@ -83,10 +84,11 @@ aqs_status aba_alloc(aqs_linkage *L)
     a->pos_of_comp = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
     a->x = lk_calloc(L, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
     a->need = lk_calloc(L, (size_t)m->ne + 1, 1);
+    a->path = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
     head = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
     next = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
     stack = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !head || !next || !stack) {
+    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !a->path || !head || !next || !stack) {
         lk_free(L, head);
         lk_free(L, next);
         lk_free(L, stack);
@@ -133,6 +135,7 @@ aqs_status aba_alloc(aqs_linkage *L)
         a->um = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
         if (!a->Um || !a->um) return AQS_ENOMEM;
     }
+    a->dirty = 1; /* IA and pA set by the first solve */
     return AQS_OK;
 }
 
@@ -146,6 +149,7 @@ void aba_free(aqs_linkage *L)
     lk_free(L, a->um);
     lk_free(L, a->x);
     lk_free(L, a->need);
+    lk_free(L, a->path);
     memset(a, 0, sizeof *a);
 }
 
@@ -242,40 +246,44 @@ ABA_INLINE void compose(const pose *a, const pose *b, pose *out)
     }
 }
 
-/* Mark the positions whose world pose the loads need: every loaded
- * composite and its ancestors (each path stops at a marked one). */
-static void mark_world(aqs_linkage *L)
+/* The world poses the loads need, top-down along the path from each loaded
+ * composite up to the first position already done (or the world), into
+ * node[].v.world, with their X; need[] marks them (the backward pass clears
+ * the marks and does not compose those X again). */
+static void world_for_loads(aqs_linkage *L)
 {
     aba_state *a = &L->aba;
     const model *m = &L->m;
-    int32_t i;
+    int32_t i, n = 0;
     for (i = 0; i < L->nloaded; i++) {
-        int32_t c = m->comp_of_body[L->loaded_bodies[i]], k;
+        int32_t c = m->comp_of_body[L->loaded_bodies[i]], k, start = n, j;
         if (c == m->ncomp) continue;
-        for (k = a->pos_of_comp[c]; k >= 0 && !a->need[k]; k = a->joint[k].parent) a->need[k] = 1;
-    }
-}
-
-/* Forward sweep over the positions: each composite's pose in its parent,
- * its own inertia as the start of its articulated inertia, pA = 0 (the
- * children add to both), and the world poses of the marked positions
- * (clearing the marks). */
-static void pose_pass(aqs_linkage *L)
-{
-    aba_state *a = &L->aba;
-    int32_t k, ne = L->m.ne;
-    for (k = 0; k < ne; k++) {
-        const aba_joint *jt = &a->joint[k];
-        aba_node *nd = &a->node[k];
-        joint_pose(L, jt, &nd->X);
-        memcpy(nd->IA, jt->I, sizeof nd->IA);
-        memset(nd->pA, 0, sizeof nd->pA);
-        if (a->need[k]) {
-            a->need[k] = 0;
+        for (k = a->pos_of_comp[c]; k >= 0 && !a->need[k]; k = a->joint[k].parent) {
+            a->need[k] = 1;
+            a->path[n++] = k;
+        }
+        for (j = n - 1; j >= start; j--) { /* parents first */
+            const aba_joint *jt = &a->joint[a->path[j]];
+            aba_node *nd = &a->node[a->path[j]];
+            joint_pose(L, jt, &nd->X); /* kept: the backward pass skips it */
             if (jt->parent < 0) nd->v.world = nd->X;
             else compose(&a->node[jt->parent].v.world, &nd->X, &nd->v.world);
         }
     }
+}
+
+/* IA <- I, pA <- 0 and no marks everywhere (after a failed solve, and
+ * before the first). */
+static void reset_nodes(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    memset(a->need, 0, (size_t)L->m.ne);
+    for (k = 0; k < L->m.ne; k++) {
+        memcpy(a->node[k].IA, a->joint[k].I, sizeof a->node[k].IA);
+        memset(a->node[k].pA, 0, sizeof a->node[k].pA);
+    }
+    a->dirty = 0;
 }
 
 /* out += R S R^T for packed symmetric 3x3 S (xx xy xz yy yz zz), R row-major. */
@@ -478,6 +486,8 @@ static aqs_status backward(aqs_linkage *L)
         aba_node *nd = &a->node[k];
         const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
         double Ia[21], pa[6], *U = nd->v.s.U;
+        if (a->need[k]) a->need[k] = 0; /* X composed for the loads already */
+        else joint_pose(L, jt, &nd->X); /* composed once: the forward pass reads it */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             double D, Dinv, u, w;
             if (jt->type == AQS_JOINT_REVOLUTE) { /* S = [axis; 0]: U = [A x; B^T x] */
@@ -603,6 +613,8 @@ static void forward(aqs_linkage *L)
         }
         inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
+        memset(nd->pA, 0, sizeof nd->pA);
     }
 }
 
@@ -648,12 +660,15 @@ aqs_status aba_solve(aqs_linkage *L)
     /* World poses for the loads: from the sweep when the tree's are stale
      * (the tree's take O(log N) per loaded body when current). */
     int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
-    if (world) mark_world(L);
-    pose_pass(L);
+    if (L->aba.dirty) reset_nodes(L);
+    if (world) world_for_loads(L);
     L->aba.world_valid = world;
     update_loads(L); /* the composites' loads in their frames */
     L->aba.world_valid = 0;
-    if ((st = backward(L)) != AQS_OK) return st;
+    if ((st = backward(L)) != AQS_OK) {
+        L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
+        return st;
+    }
     forward(L);
     L->aba.x_valid = 1;
     welded_forces(L);

@@ -163,17 +163,19 @@ typedef struct {
  * parent joint. Spatial inertias are packed symmetric [A B; B^T C]:
  * A and C upper triangles (xx xy xz yy yz zz), B row-major 3x3. */
 typedef struct {
-    pose place;       /* the joint frame in the parent composite's frame */
-    double axis[3];   /* the joint's axis (revolute, prismatic) */
-    double I[21];     /* the composite's spatial inertia, its frame, packed */
     int32_t parent;   /* ABA position of the parent composite; -1: the world */
     int32_t type;     /* AQS_JOINT_* */
     int32_t qoff, voff;
     int32_t joint;    /* user joint index */
     int32_t comp;     /* the child composite */
+    double axis[3];   /* the joint's axis (revolute, prismatic) */
+    pose place;       /* the joint frame in the parent composite's frame */
+    double I[21];     /* the composite's spatial inertia, its frame, packed */
 } aba_joint;
 
-/* Rewritten by every solve, same order. */
+/* Rewritten by every solve, same order. IA and pA are left at I and 0 by
+ * the forward pass for the next solve's backward pass (children add into
+ * their parent before the parent's turn). */
 typedef struct {
     pose X;           /* the composite's frame in its parent's at the current q */
     double IA[21];    /* articulated inertia of the subtree, its frame, packed */
@@ -195,8 +197,9 @@ typedef struct {
     double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
     double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
-    unsigned char *need; /* ne: the position's world pose is needed (a loaded composite or an
-                            ancestor of one); set before a pose sweep, cleared by it */
+    unsigned char *need; /* ne: the position's world pose was computed for the loads */
+    int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */
+    int dirty;        /* a failed solve left IA / pA accumulated: reset them first */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
     int x_valid;      /* inside aba_solve after its pose sweep: world poses by walking up
                          (aba_comp_world_walk) rather than refreshing stale tree poses */
