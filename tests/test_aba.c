@@ -495,6 +495,45 @@ static void test_reverse_numbered_chain(void **state)
     }
 }
 
+/* A solve that fails inside the backward pass (a prismatic joint moved 1e200
+ * m: the moved articulated inertia overflows) leaves the solver's
+ * accumulators partly summed; the next solve at sane positions resets them
+ * and agrees with the DCA twin. */
+static void test_failed_solve_then_solve(void **state)
+{
+    aqs_linkage *L[2];
+    outputs o[2];
+    int s, i, n = 8;
+    (void)state;
+    for (s = 0; s < 2; s++) {
+        double g[3] = {0, -9.81, 0.5}, q[8];
+        L[s] = test_new_linkage();
+        assert_int_equal(aqs_linkage_set_exact_solver(L[s], s ? AQS_EXACT_DCA : AQS_EXACT_ABA), AQS_OK);
+        for (i = 0; i < n; i++) test_add_body(L[s], 1.0 + 0.2 * i, 0.4, 0.05, 0, 0.1);
+        for (i = 0; i < n; i++)
+            test_add_joint(L[s], i == 5 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE, i - 1, i, i ? 0.8 : 0.0, 0.1, 0,
+                           0.3, 0.2 * (i % 3), 1);
+        assert_int_equal(aqs_linkage_finalize(L[s]), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(L[s], g), AQS_OK);
+        for (i = 0; i < n; i++) q[i] = 0.1 * i;
+        if (!s) {
+            q[5] = 1e200;
+            assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)n), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(L[s]), AQS_ENUMERIC);
+            q[5] = 0.5;
+        }
+        assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)n), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L[s]), AQS_OK);
+        read_outputs(L[s], &o[s]);
+    }
+    assert_true(test_rel_diff(o[0].qdd, o[1].qdd, (size_t)o[0].nv) <= 1e-10);
+    assert_true(test_rel_diff(o[0].f, o[1].f, 6 * (size_t)o[0].nj) <= 1e-10);
+    for (s = 0; s < 2; s++) {
+        free_outputs(&o[s]);
+        aqs_linkage_destroy(L[s]);
+    }
+}
+
 /* set_positions on a finalized linkage of scalar coordinates checks every
  * value in one pass: a non-finite one is refused with the joint and value
  * named, and no position changes. */
@@ -538,6 +577,7 @@ int main(void)
         cmocka_unit_test(test_no_tree_poses),
         cmocka_unit_test(test_reverse_numbered_chain),
         cmocka_unit_test(test_set_positions_refused),
+        cmocka_unit_test(test_failed_solve_then_solve),
     };
     return cmocka_run_group_tests_name("aba", tests, NULL, NULL);
 }
