@@ -76,7 +76,7 @@ aqs_status update_poses_alloc(aqs_linkage *L)
 {
     tree *t = &L->t;
     int32_t n;
-    if (t->poses || t->nnodes == 0) return AQS_OK;
+    if (t->poses) return AQS_OK;
     t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
     if (!t->poses)
         return lk_fail(L, AQS_ENOMEM, "out of memory for the assembly tree's %lld poses", (long long)t->nposes);
