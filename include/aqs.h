@@ -662,7 +662,9 @@ AQS_API aqs_status aqs_joint_get_constraint_force(const aqs_linkage *linkage, in
                                                   double f[6]);
 
 /** World pose of one body at the current positions (after finalize), found
- *  through the assembly tree's hierarchical frames in O(log N).
+ *  through the assembly tree's hierarchical frames in O(log N) (after one
+ *  O(N) refresh when positions moved since they were last needed), or up the
+ *  kinematic tree in O(depth) when the tree holds no frames (docs/api.md).
  *  pos: (3) origin of the body frame, world frame. quat: (4, w x y z)
  *  orientation. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ESTATE. */
 AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *linkage, int32_t body,

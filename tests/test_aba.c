@@ -317,6 +317,254 @@ static void test_dca_coefficients_on_demand(void **state)
     assert_int_equal(cs.live, 0);
 }
 
+/* World poses two ways: through the assembly tree (aqs_body_get_pose_world)
+ * and by the independent all-bodies walk (aqs_linkage_get_body_poses_world).
+ * Largest difference over positions and quaternion entries (sign-fixed). */
+static double pose_paths_differ(aqs_linkage *L)
+{
+    int32_t nb, b, i;
+    double *all, worst = 0.0;
+    assert_int_equal(aqs_linkage_get_sizes(L, &nb, NULL, NULL, NULL), AQS_OK);
+    all = malloc(sizeof(double) * 7 * (size_t)nb);
+    assert_int_equal(aqs_linkage_get_body_poses_world(L, all, 7 * (size_t)nb), AQS_OK);
+    for (b = 0; b < nb; b++) {
+        double pos[3], quat[4], s = 0.0;
+        assert_int_equal(aqs_body_get_pose_world(L, b, pos, quat), AQS_OK);
+        for (i = 0; i < 4; i++) s += quat[i] * all[7 * b + 3 + i];
+        for (i = 0; i < 3; i++) worst = fmax(worst, fabs(pos[i] - all[7 * b + i]));
+        for (i = 0; i < 4; i++) worst = fmax(worst, fabs((s < 0 ? -quat[i] : quat[i]) - all[7 * b + 3 + i]));
+    }
+    free(all);
+    return worst;
+}
+
+/* set_positions leaves the tree's poses stale (the exact solve does not read
+ * them); what reads them recomputes them first: a world-pose query, an
+ * adaptive solve (against the DCA linkage, whose tree was always current
+ * through its exact solves), a single joint moved while stale. With a
+ * collision shape the poses follow every move. */
+static void test_lazy_tree_poses(void **state)
+{
+    aqs_linkage *A = random_tree(91, 70, 1, AQS_EXACT_ABA), *D = random_tree(91, 70, 1, AQS_EXACT_DCA);
+    outputs a, d;
+    double q1[1] = {0.4}, size[3] = {0.1, 0, 0}, zero[3] = {0, 0, 0}, id[4] = {1, 0, 0, 0};
+    int32_t j;
+    int k;
+    (void)state;
+    assert_true(A->t.poses_stale); /* random_tree set every position */
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+    assert_true(A->t.poses_stale);
+    assert_false(D->t.poses_stale); /* the DCA's update recomputed them */
+    read_outputs(A, &a);
+    read_outputs(D, &d);
+    assert_true(test_rel_diff(a.qdd, d.qdd, (size_t)a.nv) <= 1e-10);
+    assert_true(test_rel_diff(a.f, d.f, 6 * (size_t)a.nj) <= 1e-10);
+    free_outputs(&a);
+    free_outputs(&d);
+    assert_true(pose_paths_differ(A) <= 1e-12); /* the query recomputed them */
+    assert_false(A->t.poses_stale);
+    for (k = 0; k < 3; k++) {
+        assert_int_equal(aqs_linkage_step(A, 0.02), AQS_OK);
+        assert_int_equal(aqs_linkage_step(D, 0.02), AQS_OK);
+    }
+    assert_true(A->t.poses_stale);
+    /* a revolute joint moved while every pose is stale */
+    for (j = 1; j < 70; j++) {
+        int32_t nq, nv;
+        assert_int_equal(aqs_joint_get_layout(A, j, NULL, &nq, NULL, &nv), AQS_OK);
+        if (nq == 1 && A->joints[j].type == AQS_JOINT_REVOLUTE) break;
+    }
+    assert_true(j < 70);
+    assert_int_equal(aqs_joint_set_position(A, j, q1, 1), AQS_OK);
+    assert_int_equal(aqs_joint_set_position(D, j, q1, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, ldexp(1.0, -30)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(D, AQS_METRIC_REL_JOINT, ldexp(1.0, -30)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(D), AQS_OK);
+    assert_false(A->t.poses_stale);
+    read_outputs(A, &a);
+    read_outputs(D, &d);
+    assert_true(test_rel_diff(a.q, d.q, (size_t)a.nq) <= 1e-12);
+    assert_true(test_rel_diff(a.qdd, d.qdd, (size_t)a.nv) <= 1e-8);
+    free_outputs(&a);
+    free_outputs(&d);
+    assert_true(pose_paths_differ(A) <= 1e-12);
+    /* a shape: from then on set_positions moves the poses at once */
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_step(A, 0.02), AQS_OK);
+    assert_true(A->t.poses_stale);
+    assert_int_equal(aqs_shape_add(A, 3, AQS_SHAPE_SPHERE, size, zero, id, NULL), AQS_OK);
+    assert_false(A->t.poses_stale);
+    assert_int_equal(aqs_linkage_step(A, 0.02), AQS_OK);
+    assert_false(A->t.poses_stale);
+    assert_true(pose_paths_differ(A) <= 1e-12);
+    aqs_linkage_destroy(A);
+    aqs_linkage_destroy(D);
+}
+
+/* Without welded bodies, shapes, a tolerance or the DCA the tree never holds
+ * poses: a world-pose query walks up the kinematic tree and agrees, at
+ * random positions, with the tree's answer on a twin linkage that has a
+ * tolerance (its poses through the assembly tree), and with the all-bodies
+ * pass. */
+static void test_no_tree_poses(void **state)
+{
+    aqs_linkage *L[2];
+    int s, i, n = 40;
+    uint64_t rng = 5;
+    double worst = 0.0;
+    (void)state;
+    for (s = 0; s < 2; s++) {
+        uint64_t r = rng;
+        L[s] = test_new_linkage();
+        for (i = 0; i < n; i++) test_add_body(L[s], 1.0 + 0.05 * i, 0.3, 0.02, -0.01, 0.1);
+        for (i = 0; i < n; i++) {
+            int32_t parent = i ? (int32_t)test_uniform(&r, i / 2.0, i) : AQS_WORLD;
+            int32_t type = i % 5 == 3 ? AQS_JOINT_SPHERICAL : i % 3 == 1 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE;
+            test_add_joint(L[s], type, parent, i, i ? test_uniform(&r, -0.8, 0.8) : 0.0, test_uniform(&r, -0.5, 0.5),
+                           0.2, test_uniform(&r, -1, 1), test_uniform(&r, -1, 1), 1.0);
+        }
+        assert_int_equal(aqs_linkage_finalize(L[s]), AQS_OK);
+        if (s) assert_int_equal(aqs_linkage_set_tolerance(L[s], AQS_METRIC_REL_JOINT, ldexp(1.0, -20)), AQS_OK);
+        for (i = 0; i < 4; i++) assert_int_equal(aqs_linkage_step(L[s], 0.05), AQS_OK);
+    }
+    assert_null(L[0]->t.poses);
+    assert_non_null(L[1]->t.poses);
+    {   /* the same random positions on both */
+        int32_t nq, off, m;
+        double *q;
+        assert_int_equal(aqs_linkage_get_sizes(L[0], NULL, NULL, &nq, NULL), AQS_OK);
+        q = malloc(sizeof(double) * (size_t)nq);
+        for (i = 0; i < n; i++) {
+            int k;
+            assert_int_equal(aqs_joint_get_layout(L[0], i, &off, &m, NULL, NULL), AQS_OK);
+            if (m == 4) test_random_quat(&rng, q + off);
+            else for (k = 0; k < m; k++) q[off + k] = test_uniform(&rng, -1.5, 1.5);
+        }
+        for (s = 0; s < 2; s++) assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)nq), AQS_OK);
+        free(q);
+    }
+    for (i = 0; i < n; i++) {
+        double p0[3], q0[4], p1[3], q1[4], dot = 0.0;
+        int k;
+        assert_int_equal(aqs_body_get_pose_world(L[0], i, p0, q0), AQS_OK);
+        assert_int_equal(aqs_body_get_pose_world(L[1], i, p1, q1), AQS_OK);
+        for (k = 0; k < 4; k++) dot += q0[k] * q1[k];
+        for (k = 0; k < 3; k++) worst = fmax(worst, fabs(p0[k] - p1[k]));
+        for (k = 0; k < 4; k++) worst = fmax(worst, fabs((dot < 0 ? -q0[k] : q0[k]) - q1[k]));
+    }
+    assert_true(worst <= 1e-12);
+    assert_true(pose_paths_differ(L[0]) <= 1e-12);
+    assert_null(L[0]->t.poses); /* reading allocated nothing */
+    for (s = 0; s < 2; s++) aqs_linkage_destroy(L[s]);
+}
+
+/* A chain whose bodies and joints are numbered against the kinematic order
+ * (the root is the last body, each joint's parent has the higher index):
+ * the articulated-body order is depth first whatever the numbering, and
+ * agrees with the DCA. */
+static void test_reverse_numbered_chain(void **state)
+{
+    aqs_linkage *L[2];
+    outputs o[2];
+    int s, i, n = 25;
+    (void)state;
+    for (s = 0; s < 2; s++) {
+        double g[3] = {0.1, -9.81, 0.3};
+        L[s] = test_new_linkage();
+        assert_int_equal(aqs_linkage_set_exact_solver(L[s], s ? AQS_EXACT_DCA : AQS_EXACT_ABA), AQS_OK);
+        for (i = 0; i < n; i++) test_add_body(L[s], 1.0 + 0.1 * i, 0.4, 0.05, 0, 0.1);
+        for (i = n - 1; i >= 0; i--) /* joint of body i, parent body i + 1 */
+            test_add_joint(L[s], i % 4 == 1 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE, i == n - 1 ? AQS_WORLD : i + 1,
+                           i, i == n - 1 ? 0.0 : 0.8, 0.1, 0, 0.3, 0.2 * (i % 3), 1);
+        assert_int_equal(aqs_linkage_finalize(L[s]), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(L[s], g), AQS_OK);
+        {
+            double f[3] = {1, 2, -1}, p[3] = {0.5, 0, 0};
+            assert_int_equal(aqs_body_set_force(L[s], 0, f, p, NULL), AQS_OK);
+        }
+        assert_int_equal(aqs_linkage_solve(L[s]), AQS_OK);
+        read_outputs(L[s], &o[s]);
+    }
+    assert_true(test_rel_diff(o[0].qdd, o[1].qdd, (size_t)o[0].nv) <= 1e-10);
+    assert_true(test_rel_diff(o[0].f, o[1].f, 6 * (size_t)o[0].nj) <= 1e-10);
+    for (s = 0; s < 2; s++) {
+        free_outputs(&o[s]);
+        aqs_linkage_destroy(L[s]);
+    }
+}
+
+/* A solve that fails inside the backward pass (a prismatic joint moved 1e200
+ * m: the moved articulated inertia overflows) leaves the solver's
+ * accumulators partly summed; the next solve at sane positions resets them
+ * and agrees with the DCA twin. */
+static void test_failed_solve_then_solve(void **state)
+{
+    aqs_linkage *L[2];
+    outputs o[2];
+    int s, i, n = 8;
+    (void)state;
+    for (s = 0; s < 2; s++) {
+        double g[3] = {0, -9.81, 0.5}, q[8];
+        L[s] = test_new_linkage();
+        assert_int_equal(aqs_linkage_set_exact_solver(L[s], s ? AQS_EXACT_DCA : AQS_EXACT_ABA), AQS_OK);
+        for (i = 0; i < n; i++) test_add_body(L[s], 1.0 + 0.2 * i, 0.4, 0.05, 0, 0.1);
+        for (i = 0; i < n; i++)
+            test_add_joint(L[s], i == 5 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE, i - 1, i, i ? 0.8 : 0.0, 0.1, 0,
+                           0.3, 0.2 * (i % 3), 1);
+        assert_int_equal(aqs_linkage_finalize(L[s]), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(L[s], g), AQS_OK);
+        for (i = 0; i < n; i++) q[i] = 0.1 * i;
+        if (!s) {
+            q[5] = 1e200;
+            assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)n), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(L[s]), AQS_ENUMERIC);
+            q[5] = 0.5;
+        }
+        assert_int_equal(aqs_linkage_set_positions(L[s], q, (size_t)n), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L[s]), AQS_OK);
+        read_outputs(L[s], &o[s]);
+    }
+    assert_true(test_rel_diff(o[0].qdd, o[1].qdd, (size_t)o[0].nv) <= 1e-10);
+    assert_true(test_rel_diff(o[0].f, o[1].f, 6 * (size_t)o[0].nj) <= 1e-10);
+    for (s = 0; s < 2; s++) {
+        free_outputs(&o[s]);
+        aqs_linkage_destroy(L[s]);
+    }
+}
+
+/* set_positions on a finalized linkage of scalar coordinates checks every
+ * value in one pass: a non-finite one is refused with the joint and value
+ * named, and no position changes. */
+static void test_set_positions_refused(void **state)
+{
+    aqs_linkage *L = test_new_linkage();
+    double q[6] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, before[6], after[6];
+    int i;
+    (void)state;
+    for (i = 0; i < 6; i++) {
+        test_add_body(L, 1.0, 0.5, 0, 0, 0.1);
+        test_add_joint(L, AQS_JOINT_REVOLUTE, i - 1, i, i ? 1.0 : 0.0, 0, 0, 0, 0, 1);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(L, q, 6), AQS_OK);
+    assert_int_equal(aqs_linkage_get_positions(L, before, 6), AQS_OK);
+    q[4] = NAN;
+    q[5] = 9.0;
+    assert_int_equal(aqs_linkage_set_positions(L, q, 6), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "joint 4");
+    test_assert_contains(aqs_linkage_last_error(L), "nan");
+    assert_int_equal(aqs_linkage_get_positions(L, after, 6), AQS_OK);
+    assert_memory_equal(before, after, sizeof before);
+    q[4] = INFINITY;
+    assert_int_equal(aqs_linkage_set_positions(L, q, 6), AQS_EINVAL);
+    test_assert_contains(aqs_linkage_last_error(L), "joint 4");
+    assert_int_equal(aqs_linkage_get_positions(L, after, 6), AQS_OK);
+    assert_memory_equal(before, after, sizeof before);
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -325,6 +573,11 @@ int main(void)
         cmocka_unit_test(test_stale_tree_recomputed),
         cmocka_unit_test(test_exact_solver_errors),
         cmocka_unit_test(test_dca_coefficients_on_demand),
+        cmocka_unit_test(test_lazy_tree_poses),
+        cmocka_unit_test(test_no_tree_poses),
+        cmocka_unit_test(test_reverse_numbered_chain),
+        cmocka_unit_test(test_set_positions_refused),
+        cmocka_unit_test(test_failed_solve_then_solve),
     };
     return cmocka_run_group_tests_name("aba", tests, NULL, NULL);
 }

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "aba.h"
+#include "kintree.h"
 #include "adaptive.h"
 #include "aqs.h"
 #include "assembly.h"
@@ -146,9 +147,7 @@ static void free_solver(aqs_linkage *L)
     lk_free(L, L->cforce);
     lk_free(L, L->q_saved);
     lk_free(L, L->welded_acc);
-    lk_free(L, L->body_world);
     L->qdd = L->cforce = L->q_saved = L->welded_acc = NULL;
-    L->body_world = NULL;
 }
 
 AQS_API void aqs_linkage_destroy(aqs_linkage *L)
@@ -407,11 +406,71 @@ AQS_API aqs_status aqs_joint_add(aqs_linkage *L, int32_t type, int32_t parent, i
     return AQS_OK;
 }
 
+/* An array of used elements shrunk to exactly that many (the building
+ * arrays grow geometrically). 0, or -1 when the copy cannot be had (the
+ * array is left as it is). */
+static int shrink(aqs_linkage *L, void **arr, size_t used, size_t elem, int32_t *cap)
+{
+    void *p;
+    if (!*arr || used == 0 || used >= (size_t)*cap) return 0;
+    p = lk_alloc(L, used * elem);
+    if (!p) return -1;
+    memcpy(p, *arr, used * elem);
+    lk_free(L, *arr);
+    *arr = p;
+    *cap = (int32_t)used;
+    return 0;
+}
+
+/* Release the unused capacity of the body, joint, position and force arrays
+ * (up to half of them after geometric growth). 0, or -1 when out of memory
+ * (the contents are unchanged either way). */
+static int shrink_building_arrays(aqs_linkage *L)
+{
+    size_t nb = (size_t)L->nbodies;
+    int32_t c;
+    void *p;
+    if (L->body_cap > L->nbodies && L->nbodies > 0) {
+        body_def *b = lk_alloc(L, nb * sizeof *b);
+        body_load *ld = lk_alloc(L, nb * sizeof *ld);
+        int32_t *slot = lk_alloc(L, nb * sizeof *slot), *list = lk_alloc(L, nb * sizeof *list);
+        if (!b || !ld || !slot || !list) {
+            lk_free(L, b);
+            lk_free(L, ld);
+            lk_free(L, slot);
+            lk_free(L, list);
+            return -1;
+        }
+        memcpy(b, L->bodies, nb * sizeof *b);
+        memcpy(ld, L->loads, nb * sizeof *ld);
+        memcpy(slot, L->load_slot, nb * sizeof *slot);
+        if (L->nloaded) memcpy(list, L->loaded_bodies, (size_t)L->nloaded * sizeof *list);
+        lk_free(L, L->bodies);
+        lk_free(L, L->loads);
+        lk_free(L, L->load_slot);
+        lk_free(L, L->loaded_bodies);
+        L->bodies = b;
+        L->loads = ld;
+        L->load_slot = slot;
+        L->loaded_bodies = list;
+        L->body_cap = L->nbodies;
+    }
+    p = L->joints;
+    if (shrink(L, &p, (size_t)L->njoints, sizeof *L->joints, &L->joint_cap)) return -1;
+    L->joints = p;
+    p = L->q, c = L->q_cap;
+    if (shrink(L, &p, (size_t)L->nq, sizeof *L->q, &c)) return -1;
+    L->q = p, L->q_cap = c;
+    p = L->tau, c = L->v_cap;
+    if (shrink(L, &p, (size_t)L->nv, sizeof *L->tau, &c)) return -1;
+    L->tau = p, L->v_cap = c;
+    return 0;
+}
+
 AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
 {
     static const char fn[] = "aqs_linkage_finalize";
     aqs_status st;
-    int32_t n;
     CHECK_LINKAGE(L);
     if ((st = need_building(L, fn)) != AQS_OK) return st;
     if ((st = model_build(L)) != AQS_OK) return st;
@@ -422,16 +481,22 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     L->qdd = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
     L->cforce = lk_calloc(L, 6 * (size_t)L->njoints + 1, sizeof(double));
     L->q_saved = lk_calloc(L, (size_t)L->nq + 1, sizeof(double));
-    L->welded_acc = lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double));
-    L->body_world = lk_calloc(L, (size_t)L->nbodies, sizeof(pose));
-    if (!L->qdd || !L->cforce || !L->q_saved || !L->welded_acc || !L->body_world ||
-        adaptive_alloc(L) != AQS_OK || aba_alloc(L) != AQS_OK) {
+    /* welded bodies' forces: their accelerations, the inverse inertias */
+    L->welded_acc = L->m.nwelded ? lk_calloc(L, 6 * (size_t)L->nbodies + 1, sizeof(double)) : NULL;
+    if (!L->qdd || !L->cforce || !L->q_saved || (L->m.nwelded && !L->welded_acc) ||
+        adaptive_alloc(L) != AQS_OK || aba_alloc(L) != AQS_OK || (L->m.nwelded && model_inverse_alloc(L) != AQS_OK)) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
-    for (n = 0; n < L->t.nnodes; n++)
-        if (L->t.nodes[n].joint < 0) frames_leaf(L, n);
-    frames_all(L);
+    /* The tree's poses when collision needs them at once, or the leaves'
+     * (welded bodies' forces after an exact solve); otherwise when a setter
+     * first chooses the DCA or a tolerance (dca_enable) or a shape is added. */
+    if ((L->col && frames_poses(L) != AQS_OK) || (L->m.nwelded > 0 && frames_poses_alloc(L) != AQS_OK) ||
+        shrink_building_arrays(L) != 0) {
+        free_solver(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
+    }
+    model_drop_inertia(L); /* the articulated-body solver has it, packed */
     stale_tree(L);
     /* The DCA coefficients only when the DCA is the exact solver, or when
      * nothing can move (no tree node: the solve takes the DCA path, and its
@@ -596,6 +661,21 @@ static aqs_status check_joint_outputs(aqs_linkage *L, const char *fn, int32_t j)
     return AQS_OK;
 }
 
+/* Whether x[0..n) are all finite: x * 0 is 0 for finite x, NaN otherwise. */
+static int all_finite(const double *x, size_t n)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t i;
+    for (i = 0; i + 4 <= n; i += 4) {
+        s0 += x[i] * 0.0;
+        s1 += x[i + 1] * 0.0;
+        s2 += x[i + 2] * 0.0;
+        s3 += x[i + 3] * 0.0;
+    }
+    for (; i < n; i++) s0 += x[i] * 0.0;
+    return s0 + s1 + s2 + s3 == 0.0;
+}
+
 /* Non-finite numbers are never returned silently: check what was computed. */
 static aqs_status check_outputs(aqs_linkage *L, const char *fn)
 {
@@ -603,6 +683,8 @@ static aqs_status check_outputs(aqs_linkage *L, const char *fn)
     aqs_status st = AQS_OK;
     int32_t i;
     if (s->all) {
+        /* one pass over both arrays; the joint loop names the first bad one */
+        if (all_finite(L->qdd, (size_t)L->nv) && all_finite(L->cforce, 6 * (size_t)L->njoints)) return AQS_OK;
         for (i = 0; i < L->njoints && st == AQS_OK; i++) st = check_joint_outputs(L, fn, i);
     } else {
         /* An adaptive solve orders the joints by A (MATH.md §6): overflowed
@@ -755,8 +837,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         char msg[sizeof L->error];
         memcpy(msg, L->error, sizeof msg);
         copy_moved_positions(L, L->q, L->q_saved);
-        frames_all(L);
-        stale_positions(L, -1);
+        frames_positions_moved(L);
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
@@ -989,8 +1070,7 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
 {
     if (!L->finalized) return;
     if (joint < 0) {
-        frames_all(L);
-        stale_positions(L, -1);
+        frames_positions_moved(L);
         autopath_tree_moved(L, 0); /* the caller's: an adaptive solve pays it too */
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
@@ -1012,6 +1092,18 @@ AQS_API aqs_status aqs_linkage_set_positions(aqs_linkage *L, const double *q, si
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but the linkage has nq = %d", fn, n, (int)L->nq);
     if (n == 0) return AQS_OK; /* nothing to set: q may be NULL */
     CHECK_PTR(L, fn, q);
+    if (L->finalized && L->m.nquat == 0) {
+        /* Scalar coordinates only: one pass over the values; the joint loop
+         * below finds the joint of a bad value for the message. */
+        int ok = 1;
+        size_t i;
+        for (i = 0; i < n; i++) ok &= isfinite(q[i]) != 0;
+        if (ok) {
+            memcpy(L->q, q, sizeof(double) * n);
+            positions_changed(L, -1);
+            return AQS_OK;
+        }
+    }
     for (j = 0; j < L->njoints; j++)
         if ((st = check_joint_position(L, fn, j, q + L->joints[j].qoff, tmp)) != AQS_OK) return st;
     for (j = 0; j < L->njoints; j++)
@@ -1151,7 +1243,11 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, doubl
     CHECK_PTR(L, fn, poses);
     if (n < 7 * (size_t)L->nbodies)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);
-    frames_all_bodies_world(L, L->body_world);
-    for (b = 0; b < L->nbodies; b++) write_pose(&L->body_world[b], poses + 7 * b, poses + 7 * b + 3);
+    kin_world_poses(L); /* the composites', in the exact solver's scratch */
+    for (b = 0; b < L->nbodies; b++) {
+        pose P;
+        kin_body_world(L, b, &P);
+        write_pose(&P, poses + 7 * b, poses + 7 * b + 3);
+    }
     return AQS_OK;
 }

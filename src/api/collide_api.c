@@ -9,6 +9,7 @@
 #include "collide.h"
 #include "linkage.h"
 #include "stale.h"
+#include "frames.h"
 
 /* Get (creating on first use) the collision state. NULL on allocation failure. */
 static collision *collide_state(aqs_linkage *L)
@@ -18,6 +19,11 @@ static collision *collide_state(aqs_linkage *L)
         if (!L->col) return NULL;
         L->col->world_group = 1u;
         L->col->world_mask = 0xFFFFFFFFu;
+        if (frames_poses(L) != AQS_OK) { /* from now on the tree's poses follow every move */
+            lk_free(L, L->col);
+            L->col = NULL;
+            return NULL;
+        }
     }
     return L->col;
 }

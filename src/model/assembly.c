@@ -444,7 +444,8 @@ aqs_status assembly_build(aqs_linkage *L)
     if (t->nnodes > 0) t->height = t->nodes[t->root].height;
     t->mean_handles = t->nnodes > 0 ? (double)total_h / t->nnodes : 0.0;
     layout(t);
-    t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
+    t->poses = NULL; /* update_poses_alloc, when the DCA, collision or a pose query first needs them */
+    t->poses_stale = 1;
     t->data = NULL; /* the DCA coefficients: dca_enable, when a DCA solve first needs them */
     /* dca_node_update: Y (6nh x 6) + Z and Z D^-1 (6nh x d, d <= 6 each) = 108 nh doubles */
     t->scratch = lk_calloc(L, 108 * (size_t)(t->max_handles + 2), sizeof(double));
@@ -456,7 +457,7 @@ aqs_status assembly_build(aqs_linkage *L)
     t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->dirty_tmp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
-    if (!t->poses || !t->scratch || !t->mscratch || !t->hscratch || !t->stamp || !t->dirty ||
+    if (!t->scratch || !t->mscratch || !t->hscratch || !t->stamp || !t->dirty ||
         !t->dirty_tmp) goto fail;
     lk_free(L, B.uf);
     lk_free(L, B.uf_node);

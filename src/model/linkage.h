@@ -95,6 +95,9 @@ typedef struct {
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
                           allocated by dca_enable */
+    int poses_stale; /* the internal nodes' poses (and J) do not follow q: frames_poses
+                        recomputes them when the DCA, the adaptive solver, collision or a
+                        world-pose query needs them (src/model/stale.c decides) */
 } tree;
 
 /* What finalize derives from the user's bodies and joints: rigid groups
@@ -104,8 +107,9 @@ typedef struct {
     int32_t *comp_of_body;  /* nbodies */
     pose *body_in_comp;     /* nbodies: body frame in its composite's frame */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
-    double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame */
-    double *comp_inverse;   /* ncomp x 36 */
+    double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
+                               finalize (kin_comp_inertia has it, packed) */
+    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc */
     double *comp_force;     /* (ncomp + 1) x 6: external load, composite frame */
     unsigned char *comp_loaded; /* ncomp + 1 */
     int32_t *loaded_comps;  /* comps whose comp_force is non-zero */
@@ -115,13 +119,15 @@ typedef struct {
     int32_t *eff_of_joint;  /* njoints: effective index or -1 for fixed joints */
     int32_t *eff_parent;    /* ne: parent composite (ncomp = world) */
     int32_t *eff_child;     /* ne: child composite */
-    pose *eff_place;        /* ne: joint frame in the parent composite's frame */
+    pose *eff_place;        /* ne: joint frame in the parent composite's frame; NULL after
+                               finalize (kin_eff_place has it) */
     int32_t *parent_joint;  /* nbodies: the joint whose child the body is */
     int32_t *order;         /* nbodies: parents before children */
     int32_t nwelded;        /* bodies that are not the root of their composite */
     int32_t *members;       /* nbodies: bodies grouped by composite, parents first */
     int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
+    int32_t nquat;          /* joints with a quaternion (spherical, free) */
 } model;
 
 /* State of the last solve (adaptive back-substitution, MATH.md §6). */
@@ -167,16 +173,54 @@ typedef struct {
     int certified;          /* aqs_solve_stats.certified */
 } solve_state;
 
-/* The exact solve by the articulated-body algorithm (src/solve/aba.c): scratch
- * sized at finalize, rewritten by every such solve. */
+/* The exact solve by the articulated-body algorithm (src/solve/aba.c). Its data
+ * live in one order, the "ABA order" (composites depth first, parents
+ * before children, children by effective joint index: for a linkage added
+ * depth first it is the user's order), streamed forward and backward.
+ * Position k is composite aba_joint[k].comp hanging from its effective
+ * parent joint. Spatial inertias are packed symmetric [A B; B^T C]:
+ * A and C upper triangles (xx xy xz yy yz zz), B row-major 3x3. */
 typedef struct {
-    int32_t *order; /* ne effective joints, each after its parent composite's joint */
-    double *IA;     /* ncomp x 36: articulated inertia of the composite's subtree, its frame */
-    double *pA;     /* ncomp x 6: bias force of the subtree (minus the loads), its frame */
-    double *acc;    /* (ncomp + 1) x 6: acceleration minus g (root trick); world last */
-    double *U;      /* nv x 6: row k of joint e is IA S_k (S_k: dof k's column of S) */
-    double *u;      /* nv: Q - S^T pA */
-    double *x;      /* 6 x max handles: a welded composite's leaf handle forces */
+    int32_t parent;   /* ABA position of the parent composite; -1: the world */
+    int32_t type;     /* AQS_JOINT_* */
+    int32_t qoff, voff;
+    int32_t joint;    /* user joint index */
+    int32_t comp;     /* the child composite */
+    double axis[3];   /* the joint's axis (revolute, prismatic) */
+    pose place;       /* the joint frame in the parent composite's frame */
+    double I[21];     /* the composite's spatial inertia, its frame, packed */
+} aba_joint;
+
+/* Rewritten by every solve, same order. IA and pA are left at I and 0 by
+ * the forward pass for the next solve's backward pass (children add into
+ * their parent before the parent's turn). */
+typedef struct {
+    pose X;           /* the composite's frame in its parent's at the current q */
+    double IA[21];    /* articulated inertia of the subtree, its frame, packed */
+    double pA[6];     /* bias force of the subtree (minus the loads), its frame */
+    union {
+        struct {
+            double U[6];   /* IA S (1-dof joints) */
+            double acc[6]; /* acceleration minus g (root trick) */
+        } s;
+        pose world;   /* before the backward pass: the frame's world pose (loads) */
+    } v;
+    double u, Dinv;   /* Q - S^T pA and 1 / (S^T U) (1-dof joints) */
+} aba_node;
+
+typedef struct {
+    aba_joint *joint; /* ne, ABA order */
+    aba_node *node;   /* ne, ABA order */
+    int32_t *pos_of_comp; /* ncomp: ABA position of each composite */
+    double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
+    double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
+    double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
+    unsigned char *need; /* ne: the position's world pose was computed for the loads */
+    int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */
+    int dirty;        /* a failed solve left IA / pA accumulated: reset them first */
+    int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
+    int x_valid;      /* inside aba_solve after its pose sweep: world poses by walking up
+                         (kin_comp_world_walk) rather than refreshing stale tree poses */
 } aba_state;
 
 /* The automatic choice between the adaptive and the exact path (src/solve/autopath.c). */
@@ -236,7 +280,6 @@ struct aqs_linkage {
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */
     aba_state aba;
-    pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;

@@ -2,6 +2,8 @@
  * the welding of fixed joints into rigid groups ("composites"). */
 #include "model.h"
 
+#include "kintree.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -175,6 +177,30 @@ void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
     spatial_inertia(b->mass, b->com, b->inertia, I);
 }
 
+aqs_status model_inverse_alloc(aqs_linkage *L)
+{
+    model *m = &L->m;
+    int32_t c;
+    if (m->comp_inverse) return AQS_OK;
+    m->comp_inverse = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    if (!m->comp_inverse) return AQS_ENOMEM;
+    for (c = 0; c < m->ncomp; c++) {
+        double I[36];
+        if (m->comp_inertia) memcpy(I, m->comp_inertia + 36 * (size_t)c, sizeof I);
+        else kin_comp_inertia(L, c, I);
+        (void)dense_spd_inverse(I, m->comp_inverse + 36 * (size_t)c, 6); /* checked at finalize */
+    }
+    return AQS_OK;
+}
+
+void model_drop_inertia(aqs_linkage *L)
+{
+    lk_free(L, L->m.comp_inertia);
+    lk_free(L, L->m.eff_place);
+    L->m.comp_inertia = NULL;
+    L->m.eff_place = NULL;
+}
+
 void model_free(aqs_linkage *L)
 {
     model *m = &L->m;
@@ -281,6 +307,8 @@ aqs_status model_build(aqs_linkage *L)
     m->ncomp = 0;
     m->ne = 0;
     for (i = 0; i < nj; i++) m->eff_of_joint[i] = L->joints[i].type == AQS_JOINT_FIXED ? -1 : m->ne++;
+    m->nquat = 0;
+    for (i = 0; i < nj; i++) m->nquat += L->joints[i].type == AQS_JOINT_SPHERICAL || L->joints[i].type == AQS_JOINT_FREE;
     for (k = 0; k < nb; k++) {
         int32_t b = m->order[k];
         const joint_def *j = &L->joints[m->parent_joint[b]];
@@ -305,7 +333,7 @@ aqs_status model_build(aqs_linkage *L)
 
     m->comp_root = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
     m->comp_inertia = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
-    m->comp_inverse = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    m->comp_inverse = NULL; /* model_inverse_alloc: the DCA and welded bodies need it */
     m->comp_force = lk_calloc(L, (size_t)m->ncomp + 1, 6 * sizeof(double));
     m->comp_loaded = lk_calloc(L, (size_t)m->ncomp + 1, 1);
     m->loaded_comps = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
@@ -313,7 +341,7 @@ aqs_status model_build(aqs_linkage *L)
     m->eff_parent = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
     m->eff_child = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
     m->eff_place = lk_calloc(L, (size_t)m->ne + 1, sizeof(pose));
-    if (!m->comp_root || !m->comp_inertia || !m->comp_inverse || !m->comp_force ||
+    if (!m->comp_root || !m->comp_inertia || !m->comp_force ||
         !m->comp_loaded || !m->loaded_comps || !m->eff_joint || !m->eff_parent ||
         !m->eff_child || !m->eff_place) {
         st = lk_fail(L, AQS_ENOMEM, "aqs_linkage_finalize: out of memory");
@@ -342,8 +370,9 @@ aqs_status model_build(aqs_linkage *L)
     }
     for (i = 0; i < m->ncomp; i++) {
         double mass = m->comp_inertia[36 * i + 21]; /* the (3,3) entry is the total mass */
+        double inv[36];
         if (!(mass > 0.0) || !rotational_inertia_definite(cmass + 13 * i) ||
-            dense_spd_inverse(m->comp_inertia + 36 * i, m->comp_inverse + 36 * i, 6) != 0) {
+            dense_spd_inverse(m->comp_inertia + 36 * i, inv, 6) != 0) {
             const char *name = lk_body_name(L, m->comp_root[i]);
             int32_t count = 0;
             for (k = 0; k < nb; k++) count += m->comp_of_body[k] == i;

@@ -12,6 +12,13 @@ aqs_status model_check_body(aqs_linkage *L, const char *fn, double mass, const d
  * Returns AQS_OK, AQS_EMODEL or AQS_ENOMEM; on failure L->m is empty. */
 aqs_status model_build(aqs_linkage *L);
 void model_free(aqs_linkage *L);
+/* The composites' inverse inertias (comp_inverse), allocated and computed
+ * when first needed: the DCA (dca_enable) and welded bodies (finalize).
+ * AQS_OK or AQS_ENOMEM (nothing changed). */
+aqs_status model_inverse_alloc(aqs_linkage *L);
+/* Release comp_inertia and eff_place after finalize: the articulated-body
+ * solver keeps both in its own order (kin_comp_inertia, kin_eff_place). */
+void model_drop_inertia(aqs_linkage *L);
 /* Spatial inertia of a body about its own origin, body frame. */
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36]);
 /* Mass properties mp (13 doubles: mass, centre of mass, rotational inertia

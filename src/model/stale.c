@@ -40,6 +40,8 @@ void stale_joint_force(aqs_linkage *L, int32_t n)
     L->s.valid = 0;
 }
 
+void stale_poses(aqs_linkage *L) { L->t.poses_stale = 1; }
+
 void stale_settings(aqs_linkage *L) { L->s.valid = 0; }
 
 void stale_loads_all(aqs_linkage *L) { L->loads_dirty = L->gravity_dirty = 1; }
@@ -66,3 +68,5 @@ void stale_gravity_fresh(aqs_linkage *L) { L->gravity_dirty = 0; }
 void stale_loads_fresh(aqs_linkage *L) { L->loads_dirty = 0; }
 
 void stale_tree_fresh(aqs_linkage *L) { L->t.all_dirty = 0; }
+
+void stale_poses_fresh(aqs_linkage *L) { L->t.poses_stale = 0; }

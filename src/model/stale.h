@@ -44,6 +44,10 @@ void stale_set_refinable(aqs_linkage *L, int refinable);
  * update_coefficients recomputes. O(log N), less when an ancestor is already
  * marked (the set is top-closed). */
 void stale_mark(aqs_linkage *L, int32_t n);
+/* Positions moved (all of them, or too many to follow): the assembly
+ * tree's internal poses no longer follow q; frames_poses recomputes them
+ * when something reads them. */
+void stale_poses(aqs_linkage *L);
 
 /* A full update recomputes every load and the gravity term as well. */
 void stale_loads_all(aqs_linkage *L);
@@ -52,5 +56,6 @@ void stale_loads_all(aqs_linkage *L);
 void stale_gravity_fresh(aqs_linkage *L); /* update_loads: the world leaf's gravity term */
 void stale_loads_fresh(aqs_linkage *L);   /* update_loads: the composites' loads */
 void stale_tree_fresh(aqs_linkage *L);    /* update_coefficients: every marked node done */
+void stale_poses_fresh(aqs_linkage *L);   /* frames_poses: every internal pose follows q */
 
 #endif

@@ -2,11 +2,9 @@
  * algorithm (ABA) over the kinematic tree of composites, all velocities
  * zero. It gives the same accelerations and constraint forces as a full DCA
  * back-substitution (MATH.md §3, checked by tests/reference against the
- * dense solver for both), in O(N) with a small constant: one 6x6 congruence
- * per joint instead of a DCA node update with its Cholesky factor and
- * handle blocks. It neither reads nor writes the assembly tree's
- * coefficients, so the tree's stale marks simply accumulate until an
- * adaptive solve needs the tree.
+ * dense solver for both), in O(N) with a small constant. It neither reads
+ * nor writes the assembly tree (its coefficients nor its poses), so the
+ * tree's stale marks simply accumulate until an adaptive solve needs it.
  *
  * For composite c hanging from effective joint e (parent composite p, S the
  * motion subspace in c's frame, Q the active force, f_c the external load):
@@ -16,7 +14,16 @@
  *   forward:   a' = X a_p,  qdd = D^-1 (u - U^T a'),  a_c = a' + S qdd
  *              f_e = IA_c a_c + pA_c  (the force of e on c, c's frame)
  * with X the motion transform from p's frame to c's, and the world moving
- * with a_0 = -g (the root trick, MATH.md §3.7). */
+ * with a_0 = -g (the root trick, MATH.md §3.7).
+ *
+ * Layout (docs/math.md §5a): one array of per-joint constants (aba_joint)
+ * and one of per-solve values (aba_node), both in the ABA order, parents
+ * before children, depth first; the passes stream them forward (poses,
+ * accelerations) and backward (inertias). Revolute and prismatic joints take
+ * a specialized path: U is one column, D a scalar, the articulated-inertia
+ * update a rank-one downdate, and the inertias are kept packed (21 values)
+ * and moved to the parent frame blockwise using their symmetry. Other joints
+ * take the general path on the unpacked 6x6 inertia. */
 #include "aba.h"
 
 #include <math.h>
@@ -25,51 +32,277 @@
 #include "adaptive.h"
 #include "dca.h"
 #include "dense.h"
+#include "kintree.h"
+#include "invariant.h"
 #include "update.h"
 
+#ifdef __GNUC__
+#define ABA_INLINE static inline __attribute__((always_inline))
+#else
+#define ABA_INLINE static
+#endif
+
+static void pack_inertia(const double *F, double *P)
+{
+    int i, j, n = 0;
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            P[KIN_PA + n] = F[6 * i + j];
+            P[KIN_PC + n] = F[6 * (3 + i) + 3 + j];
+            n++;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) P[KIN_PB + 3 * i + j] = F[6 * i + 3 + j];
+}
+
+/* Build the ABA order (depth first from the world, children by effective
+ * index) and the per-joint constants. */
 aqs_status aba_alloc(aqs_linkage *L)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    int32_t k, n = 0;
-    a->order = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    a->IA = lk_calloc(L, 36 * (size_t)m->ncomp + 1, sizeof(double));
-    a->pA = lk_calloc(L, 6 * (size_t)m->ncomp + 1, sizeof(double));
-    a->acc = lk_calloc(L, 6 * ((size_t)m->ncomp + 1), sizeof(double));
-    a->U = lk_calloc(L, 6 * (size_t)L->nv + 1, sizeof(double));
-    a->u = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
+    int32_t *head, *next, *stack, e, n = 0, top = 0, i;
+    int multi = 0;
+    a->joint = lk_calloc(L, (size_t)m->ne + 1, sizeof(aba_joint));
+    a->node = lk_calloc(L, (size_t)m->ne + 1, sizeof(aba_node));
+    a->pos_of_comp = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
     a->x = lk_calloc(L, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
-    if (!a->order || !a->IA || !a->pA || !a->acc || !a->U || !a->u || !a->x) return AQS_ENOMEM;
-    /* Bodies come parents first; a composite's root body carries its
-     * effective parent joint. */
-    for (k = 0; k < L->nbodies; k++) {
-        int32_t b = m->order[k], c = m->comp_of_body[b];
-        if (c == m->ncomp || m->comp_root[c] != b) continue;
-        a->order[n++] = m->eff_of_joint[m->parent_joint[b]];
+    a->need = lk_calloc(L, (size_t)m->ne + 1, 1);
+    a->path = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    head = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
+    next = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    stack = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !a->path || !head || !next || !stack) {
+        lk_free(L, head);
+        lk_free(L, next);
+        lk_free(L, stack);
+        return AQS_ENOMEM;
     }
+    /* Children lists, descending: popped from the stack ascending. */
+    for (i = 0; i <= m->ncomp; i++) head[i] = -1;
+    for (e = 0; e < m->ne; e++) {
+        int32_t p = m->eff_parent[e];
+        next[e] = head[p];
+        head[p] = e;
+    }
+    for (e = head[m->ncomp]; e >= 0; e = next[e]) stack[top++] = e;
+    while (top > 0) {
+        int32_t c;
+        e = stack[--top];
+        c = m->eff_child[e];
+        a->pos_of_comp[c] = n;
+        for (i = head[c]; i >= 0; i = next[i]) stack[top++] = i;
+        {
+            aba_joint *jt = &a->joint[n];
+            const joint_def *jd = &L->joints[m->eff_joint[e]];
+            int32_t p = m->eff_parent[e];
+            jt->place = m->eff_place[e];
+            memcpy(jt->axis, jd->axis, sizeof jt->axis);
+            pack_inertia(m->comp_inertia + 36 * (size_t)c, jt->I);
+            jt->parent = p == m->ncomp ? -1 : a->pos_of_comp[p]; /* p came first */
+            jt->type = jd->type;
+            jt->qoff = jd->qoff;
+            jt->voff = jd->voff;
+            jt->joint = m->eff_joint[e];
+            jt->comp = c;
+            if (joint_nv(jd->type) > 1) multi = 1;
+        }
+        n++;
+    }
+    lk_free(L, head);
+    lk_free(L, next);
+    lk_free(L, stack);
+    if (n != m->ne) return lk_fail(L, AQS_EINVAL, "internal: the articulated-body order holds %d of %d joints",
+                                   (int)n, (int)m->ne);
+    if (multi) {
+        a->Um = lk_calloc(L, 6 * (size_t)L->nv + 1, sizeof(double));
+        a->um = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
+        if (!a->Um || !a->um) return AQS_ENOMEM;
+    }
+    a->dirty = 1; /* IA and pA set by the first solve */
     return AQS_OK;
 }
 
 void aba_free(aqs_linkage *L)
 {
     aba_state *a = &L->aba;
-    lk_free(L, a->order);
-    lk_free(L, a->IA);
-    lk_free(L, a->pA);
-    lk_free(L, a->acc);
-    lk_free(L, a->U);
-    lk_free(L, a->u);
+    lk_free(L, a->joint);
+    lk_free(L, a->node);
+    lk_free(L, a->pos_of_comp);
+    lk_free(L, a->Um);
+    lk_free(L, a->um);
     lk_free(L, a->x);
+    lk_free(L, a->need);
+    lk_free(L, a->path);
     memset(a, 0, sizeof *a);
 }
 
-/* The pose of effective joint e's child composite in its parent's frame:
- * the joint's placement composed with J(q_e) (kept current in the tree by
- * frames_node whenever q_e changes). */
-static void child_in_parent(const aqs_linkage *L, int32_t e, pose *P)
+/* out = a b, written out (pose_compose). */
+ABA_INLINE void compose(const pose *a, const pose *b, pose *out)
 {
-    const tree *t = &L->t;
-    pose_compose(&L->m.eff_place[e], t->poses + t->nodes[t->node_of_eff[e]].J, P);
+    const double *A = a->R, *B = b->R;
+    int i;
+    for (i = 0; i < 3; i++) {
+        const double r0 = A[3 * i], r1 = A[3 * i + 1], r2 = A[3 * i + 2];
+        out->R[3 * i] = r0 * B[0] + r1 * B[3] + r2 * B[6];
+        out->R[3 * i + 1] = r0 * B[1] + r1 * B[4] + r2 * B[7];
+        out->R[3 * i + 2] = r0 * B[2] + r1 * B[5] + r2 * B[8];
+        out->p[i] = a->p[i] + r0 * b->p[0] + r1 * b->p[1] + r2 * b->p[2];
+    }
+}
+
+/* The world poses the loads need, top-down along the path from each loaded
+ * composite up to the first position already done (or the world), into
+ * node[].v.world, with their X; need[] marks them (the backward pass clears
+ * the marks and does not compose those X again). */
+static void world_for_loads(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    const model *m = &L->m;
+    int32_t i, n = 0;
+    for (i = 0; i < L->nloaded; i++) {
+        int32_t c = m->comp_of_body[L->loaded_bodies[i]], k, start = n, j;
+        if (c == m->ncomp) continue;
+        for (k = a->pos_of_comp[c]; k >= 0 && !a->need[k]; k = a->joint[k].parent) {
+            a->need[k] = 1;
+            a->path[n++] = k;
+        }
+        for (j = n - 1; j >= start; j--) { /* parents first */
+            const aba_joint *jt = &a->joint[a->path[j]];
+            aba_node *nd = &a->node[a->path[j]];
+            kin_joint_pose(L, jt, &nd->X); /* kept: the backward pass skips it */
+            if (jt->parent < 0) nd->v.world = nd->X;
+            else compose(&a->node[jt->parent].v.world, &nd->X, &nd->v.world);
+        }
+    }
+}
+
+/* IA <- I, pA <- 0 and no marks everywhere (after a failed solve, and
+ * before the first). */
+static void reset_nodes(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    memset(a->need, 0, (size_t)L->m.ne);
+    for (k = 0; k < L->m.ne; k++) {
+        memcpy(a->node[k].IA, a->joint[k].I, sizeof a->node[k].IA);
+        memset(a->node[k].pA, 0, sizeof a->node[k].pA);
+    }
+    a->dirty = 0;
+}
+
+/* out += R S R^T for packed symmetric 3x3 S (xx xy xz yy yz zz), R row-major. */
+ABA_INLINE void rot_sym(const double *R, const double *S, double *o)
+{
+    /* T = S R^T (3x3): T_ij = sum_k S_ik R_jk */
+    const double s00 = S[0], s01 = S[1], s02 = S[2], s11 = S[3], s12 = S[4], s22 = S[5];
+    double T[9];
+    int j;
+    for (j = 0; j < 3; j++) {
+        const double r0 = R[3 * j], r1 = R[3 * j + 1], r2 = R[3 * j + 2];
+        T[j] = s00 * r0 + s01 * r1 + s02 * r2;
+        T[3 + j] = s01 * r0 + s11 * r1 + s12 * r2;
+        T[6 + j] = s02 * r0 + s12 * r1 + s22 * r2;
+    }
+    o[0] = R[0] * T[0] + R[1] * T[3] + R[2] * T[6];
+    o[1] = R[0] * T[1] + R[1] * T[4] + R[2] * T[7];
+    o[2] = R[0] * T[2] + R[1] * T[5] + R[2] * T[8];
+    o[3] = R[3] * T[1] + R[4] * T[4] + R[5] * T[7];
+    o[4] = R[3] * T[2] + R[4] * T[5] + R[5] * T[8];
+    o[5] = R[6] * T[2] + R[7] * T[5] + R[8] * T[8];
+}
+
+/* o = R B R^T for a full 3x3 B. */
+ABA_INLINE void rot_full(const double *R, const double *B, double *o)
+{
+    double T[9];
+    int i, j;
+    for (i = 0; i < 3; i++) /* T = B R^T */
+        for (j = 0; j < 3; j++) T[3 * i + j] = B[3 * i] * R[3 * j] + B[3 * i + 1] * R[3 * j + 1] + B[3 * i + 2] * R[3 * j + 2];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) o[3 * i + j] = R[3 * i] * T[j] + R[3 * i + 1] * T[3 + j] + R[3 * i + 2] * T[6 + j];
+}
+
+ABA_INLINE void cross(const double *a, double b0, double b1, double b2, double *o)
+{
+    o[0] = a[1] * b2 - a[2] * b1;
+    o[1] = a[2] * b0 - a[0] * b2;
+    o[2] = a[0] * b1 - a[1] * b0;
+}
+
+/* IG += X* IF X*^T for the frame with pose P in G, packed; the same
+ * arithmetic as spatial_inertia_to_parent: rotate the blocks (A' = R A R^T,
+ * B' = R B R^T, C' = R C R^T), then with M = p~ C' and K = p~ B'^T:
+ * A'' = A' + K + K^T - M p~,  B'' = B' + M,  C'' = C'. */
+static void inertia_to_parent_add(const pose *P, const double *IF, double *IG)
+{
+    const double *p = P->p;
+    double A[6], B[9], C[6], Cf[9], M[9], K[9], N[9];
+    int i, j;
+    rot_sym(P->R, IF + KIN_PA, A);
+    rot_full(P->R, IF + KIN_PB, B);
+    rot_sym(P->R, IF + KIN_PC, C);
+    Cf[0] = C[0], Cf[1] = Cf[3] = C[1], Cf[2] = Cf[6] = C[2];
+    Cf[4] = C[3], Cf[5] = Cf[7] = C[4], Cf[8] = C[5];
+    for (j = 0; j < 3; j++) { /* column j of M = p x (column j of C'); row j of K^T... */
+        double c[3];
+        cross(p, Cf[j], Cf[3 + j], Cf[6 + j], c);
+        M[j] = c[0], M[3 + j] = c[1], M[6 + j] = c[2];
+        cross(p, B[3 * j], B[3 * j + 1], B[3 * j + 2], c); /* K column j = p x (row j of B') */
+        K[j] = c[0], K[3 + j] = c[1], K[6 + j] = c[2];
+    }
+    for (i = 0; i < 3; i++) /* row i of M p~ = -(p x row i of M) */
+        cross(p, M[3 * i], M[3 * i + 1], M[3 * i + 2], N + 3 * i);
+    IG[KIN_PA + 0] += A[0] + 2.0 * K[0] + N[0];
+    IG[KIN_PA + 1] += A[1] + K[1] + K[3] + N[1];
+    IG[KIN_PA + 2] += A[2] + K[2] + K[6] + N[2];
+    IG[KIN_PA + 3] += A[3] + 2.0 * K[4] + N[4];
+    IG[KIN_PA + 4] += A[4] + K[5] + K[7] + N[5];
+    IG[KIN_PA + 5] += A[5] + 2.0 * K[8] + N[8];
+    for (i = 0; i < 9; i++) IG[KIN_PB + i] += B[i] + M[i];
+    for (i = 0; i < 6; i++) IG[KIN_PC + i] += C[i];
+}
+
+/* pG += X^T f: [R n + p x (R f); R f]. */
+ABA_INLINE void force_to_parent_add(const pose *P, const double *f, double *g)
+{
+    const double *R = P->R, *p = P->p;
+    double l0 = R[0] * f[3] + R[1] * f[4] + R[2] * f[5];
+    double l1 = R[3] * f[3] + R[4] * f[4] + R[5] * f[5];
+    double l2 = R[6] * f[3] + R[7] * f[4] + R[8] * f[5];
+    g[0] += R[0] * f[0] + R[1] * f[1] + R[2] * f[2] + (p[1] * l2 - p[2] * l1);
+    g[1] += R[3] * f[0] + R[4] * f[1] + R[5] * f[2] + (p[2] * l0 - p[0] * l2);
+    g[2] += R[6] * f[0] + R[7] * f[1] + R[8] * f[2] + (p[0] * l1 - p[1] * l0);
+    g[3] += l0;
+    g[4] += l1;
+    g[5] += l2;
+}
+
+/* o = X v, v in the parent's frame: [R^T w; R^T (v - p x w)]. */
+ABA_INLINE void motion_from_parent(const pose *P, const double *v, double *o)
+{
+    const double *R = P->R, *p = P->p;
+    const double t0 = v[3] - (p[1] * v[2] - p[2] * v[1]);
+    const double t1 = v[4] - (p[2] * v[0] - p[0] * v[2]);
+    const double t2 = v[5] - (p[0] * v[1] - p[1] * v[0]);
+    o[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
+    o[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
+    o[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
+    o[3] = R[0] * t0 + R[3] * t1 + R[6] * t2;
+    o[4] = R[1] * t0 + R[4] * t1 + R[7] * t2;
+    o[5] = R[2] * t0 + R[5] * t1 + R[8] * t2;
+}
+
+/* o = I v for packed I. */
+ABA_INLINE void inertia_mul(const double *I, const double *v, double *o)
+{
+    const double *A = I + KIN_PA, *B = I + KIN_PB, *C = I + KIN_PC;
+    o[0] = A[0] * v[0] + A[1] * v[1] + A[2] * v[2] + B[0] * v[3] + B[1] * v[4] + B[2] * v[5];
+    o[1] = A[1] * v[0] + A[3] * v[1] + A[4] * v[2] + B[3] * v[3] + B[4] * v[4] + B[5] * v[5];
+    o[2] = A[2] * v[0] + A[4] * v[1] + A[5] * v[2] + B[6] * v[3] + B[7] * v[4] + B[8] * v[5];
+    o[3] = B[0] * v[0] + B[3] * v[1] + B[6] * v[2] + C[0] * v[3] + C[1] * v[4] + C[2] * v[5];
+    o[4] = B[1] * v[0] + B[4] * v[1] + B[7] * v[2] + C[1] * v[3] + C[3] * v[4] + C[4] * v[5];
+    o[5] = B[2] * v[0] + B[5] * v[1] + B[8] * v[2] + C[2] * v[3] + C[4] * v[4] + C[5] * v[5];
 }
 
 /* D = S^T U (d x d) from the rows U_k = IA S_k; its inverse into Dinv.
@@ -84,146 +317,209 @@ static int joint_space_inverse(const double *S, const double *U, int d, double *
             for (r = 0; r < 6; r++) v += S[r * d + i] * U[6 * j + r];
             D[d * i + j] = v;
         }
-    if (d == 1) {
-        if (!(D[0] > 0.0) || !isfinite(D[0])) return -1;
-        Dinv[0] = 1.0 / D[0];
-        return 0;
-    }
     dense_symmetrize(D, d);
     return dense_spd_inverse(D, Dinv, d);
+}
+
+static aqs_status singular(aqs_linkage *L, const aba_joint *jt)
+{
+    return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular", (int)jt->joint);
+}
+
+/* The general joint: on the unpacked inertia; Ia (packed) and pa out. */
+static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, double *Ia, double *pa)
+{
+    const aba_state *a = &L->aba;
+    const joint_def *jd = &L->joints[jt->joint];
+    const double *Q = L->tau + jt->voff;
+    double IA[36], S[36], Dinv[36], w[6], F[36], DU[36];
+    double *U = a->Um + 6 * jt->voff, *u = a->um + jt->voff;
+    int d = joint_nv(jt->type), i, j, r;
+    kin_unpack_inertia(nd->IA, IA);
+    joint_subspace(jd, L->q + jt->qoff, S);
+    for (j = 0; j < d; j++) {
+        double s = 0.0;
+        for (r = 0; r < 6; r++) {
+            double v = 0.0;
+            for (i = 0; i < 6; i++) v += IA[6 * r + i] * S[i * d + j];
+            U[6 * j + r] = v;
+            s += S[r * d + j] * nd->pA[r];
+        }
+        u[j] = Q[j] - s;
+    }
+    if (joint_space_inverse(S, U, d, Dinv) != 0) return singular(L, jt);
+    /* w = D^-1 u; Ia = IA - U^T D^-1 U (U stored as d rows), pa = pA + U^T w */
+    for (j = 0; j < d; j++) {
+        double v = 0.0;
+        for (i = 0; i < d; i++) v += Dinv[d * j + i] * u[i];
+        w[j] = v;
+    }
+    for (r = 0; r < 6; r++) {
+        double v = nd->pA[r];
+        for (j = 0; j < d; j++) v += U[6 * j + r] * w[j];
+        pa[r] = v;
+    }
+    for (j = 0; j < d; j++)
+        for (r = 0; r < 6; r++) {
+            double v = 0.0;
+            for (i = 0; i < d; i++) v += Dinv[d * j + i] * U[6 * i + r];
+            DU[6 * j + r] = v;
+        }
+    for (r = 0; r < 6; r++)
+        for (i = r; i < 6; i++) {
+            double v = IA[6 * r + i];
+            for (j = 0; j < d; j++) v -= U[6 * j + r] * DU[6 * j + i];
+            F[6 * r + i] = F[6 * i + r] = v;
+        }
+    pack_inertia(F, Ia);
+    return AQS_OK;
 }
 
 static aqs_status backward(aqs_linkage *L)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    int32_t k, c, i, j, r;
-    for (c = 0; c < m->ncomp; c++) {
-        memcpy(a->IA + 36 * c, m->comp_inertia + 36 * c, 36 * sizeof(double));
-        for (i = 0; i < 6; i++) a->pA[6 * c + i] = -m->comp_force[6 * c + i];
+    int32_t k, i;
+    aqs_status st;
+    for (i = 0; i < m->nloaded_comps; i++) { /* pA starts at minus the loads */
+        int32_t c = m->loaded_comps[i];
+        double *pA = a->node[a->pos_of_comp[c]].pA;
+        for (k = 0; k < 6; k++) pA[k] -= m->comp_force[6 * c + k];
     }
     for (k = m->ne - 1; k >= 0; k--) {
-        int32_t e = a->order[k], p = m->eff_parent[e];
-        const joint_def *jd = &L->joints[m->eff_joint[e]];
-        const double *IA, *pA, *Q = L->tau + jd->voff;
-        double S[36], Dinv[36], w[6], Ia[36], pa[6], tmp[36], *U = a->U + 6 * jd->voff, *u = a->u + jd->voff;
-        int d = joint_nv(jd->type);
-        pose P;
-        c = m->eff_child[e];
-        IA = a->IA + 36 * c;
-        pA = a->pA + 6 * c;
-        joint_subspace(jd, L->q + jd->qoff, S);
-        if (d == 1) {
-            double s = 0.0;
-            dense_matvec6(IA, S, U); /* U = IA S, S a single column */
-            for (r = 0; r < 6; r++) s += S[r] * pA[r];
-            u[0] = Q[0] - s;
-        } else {
-            for (j = 0; j < d; j++) {
-                double s = 0.0;
-                for (r = 0; r < 6; r++) {
-                    double v = 0.0;
-                    for (i = 0; i < 6; i++) v += IA[6 * r + i] * S[i * d + j];
-                    U[6 * j + r] = v;
-                    s += S[r * d + j] * pA[r];
-                }
-                u[j] = Q[j] - s;
+        const aba_joint *jt = &a->joint[k];
+        aba_node *nd = &a->node[k];
+        const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
+        double Ia[21], pa[6], *U = nd->v.s.U;
+        if (a->need[k]) a->need[k] = 0; /* X composed for the loads already */
+        else kin_joint_pose(L, jt, &nd->X); /* composed once: the forward pass reads it */
+        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+            double D, Dinv, u, w;
+            if (jt->type == AQS_JOINT_REVOLUTE) { /* S = [axis; 0]: U = [A x; B^T x] */
+                const double *A = IA + KIN_PA, *B = IA + KIN_PB;
+                U[0] = A[0] * x[0] + A[1] * x[1] + A[2] * x[2];
+                U[1] = A[1] * x[0] + A[3] * x[1] + A[4] * x[2];
+                U[2] = A[2] * x[0] + A[4] * x[1] + A[5] * x[2];
+                U[3] = B[0] * x[0] + B[3] * x[1] + B[6] * x[2];
+                U[4] = B[1] * x[0] + B[4] * x[1] + B[7] * x[2];
+                U[5] = B[2] * x[0] + B[5] * x[1] + B[8] * x[2];
+                D = x[0] * U[0] + x[1] * U[1] + x[2] * U[2];
+                u = L->tau[jt->voff] - (x[0] * pA[0] + x[1] * pA[1] + x[2] * pA[2]);
+            } else { /* S = [0; axis]: U = [B x; C x] */
+                const double *B = IA + KIN_PB, *C = IA + KIN_PC;
+                U[0] = B[0] * x[0] + B[1] * x[1] + B[2] * x[2];
+                U[1] = B[3] * x[0] + B[4] * x[1] + B[5] * x[2];
+                U[2] = B[6] * x[0] + B[7] * x[1] + B[8] * x[2];
+                U[3] = C[0] * x[0] + C[1] * x[1] + C[2] * x[2];
+                U[4] = C[1] * x[0] + C[3] * x[1] + C[4] * x[2];
+                U[5] = C[2] * x[0] + C[4] * x[1] + C[5] * x[2];
+                D = x[0] * U[3] + x[1] * U[4] + x[2] * U[5];
+                u = L->tau[jt->voff] - (x[0] * pA[3] + x[1] * pA[4] + x[2] * pA[5]);
             }
-        }
-        if (joint_space_inverse(S, U, d, Dinv) != 0)
-            return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
-                           (int)m->eff_joint[e]);
-        if (p == m->ncomp) continue; /* the world takes nothing back */
-        /* w = D^-1 u; Ia = IA - U^T D^-1 U (U stored as d rows), pa = pA + U^T w */
-        for (j = 0; j < d; j++) {
-            double v = 0.0;
-            for (i = 0; i < d; i++) v += Dinv[d * j + i] * u[i];
-            w[j] = v;
-        }
-        for (r = 0; r < 6; r++) {
-            double v = pA[r];
-            for (j = 0; j < d; j++) v += U[6 * j + r] * w[j];
-            pa[r] = v;
-        }
-        if (d == 1) {
-            for (r = 0; r < 6; r++) {
-                double ur = U[r] * Dinv[0];
-                for (i = r; i < 6; i++) Ia[6 * r + i] = Ia[6 * i + r] = IA[6 * r + i] - ur * U[i];
+            if (!(D > 0.0) || !isfinite(D)) return singular(L, jt);
+            Dinv = 1.0 / D;
+            nd->Dinv = Dinv;
+            nd->u = u;
+            if (jt->parent < 0) continue; /* the world takes nothing back */
+            w = u * Dinv;
+            {
+                /* rank-one downdate Ia = IA - U U^T / D, packed */
+                const double v0 = U[0] * Dinv, v1 = U[1] * Dinv, v2 = U[2] * Dinv;
+                const double v3 = U[3] * Dinv, v4 = U[4] * Dinv, v5 = U[5] * Dinv;
+                Ia[KIN_PA + 0] = IA[KIN_PA + 0] - v0 * U[0];
+                Ia[KIN_PA + 1] = IA[KIN_PA + 1] - v0 * U[1];
+                Ia[KIN_PA + 2] = IA[KIN_PA + 2] - v0 * U[2];
+                Ia[KIN_PA + 3] = IA[KIN_PA + 3] - v1 * U[1];
+                Ia[KIN_PA + 4] = IA[KIN_PA + 4] - v1 * U[2];
+                Ia[KIN_PA + 5] = IA[KIN_PA + 5] - v2 * U[2];
+                Ia[KIN_PB + 0] = IA[KIN_PB + 0] - v0 * U[3];
+                Ia[KIN_PB + 1] = IA[KIN_PB + 1] - v0 * U[4];
+                Ia[KIN_PB + 2] = IA[KIN_PB + 2] - v0 * U[5];
+                Ia[KIN_PB + 3] = IA[KIN_PB + 3] - v1 * U[3];
+                Ia[KIN_PB + 4] = IA[KIN_PB + 4] - v1 * U[4];
+                Ia[KIN_PB + 5] = IA[KIN_PB + 5] - v1 * U[5];
+                Ia[KIN_PB + 6] = IA[KIN_PB + 6] - v2 * U[3];
+                Ia[KIN_PB + 7] = IA[KIN_PB + 7] - v2 * U[4];
+                Ia[KIN_PB + 8] = IA[KIN_PB + 8] - v2 * U[5];
+                Ia[KIN_PC + 0] = IA[KIN_PC + 0] - v3 * U[3];
+                Ia[KIN_PC + 1] = IA[KIN_PC + 1] - v3 * U[4];
+                Ia[KIN_PC + 2] = IA[KIN_PC + 2] - v3 * U[5];
+                Ia[KIN_PC + 3] = IA[KIN_PC + 3] - v4 * U[4];
+                Ia[KIN_PC + 4] = IA[KIN_PC + 4] - v4 * U[5];
+                Ia[KIN_PC + 5] = IA[KIN_PC + 5] - v5 * U[5];
             }
+            for (i = 0; i < 6; i++) pa[i] = pA[i] + U[i] * w;
         } else {
-            double DU[36]; /* D^-1 U, d x 6 */
-            for (j = 0; j < d; j++)
-                for (r = 0; r < 6; r++) {
-                    double v = 0.0;
-                    for (i = 0; i < d; i++) v += Dinv[d * j + i] * U[6 * i + r];
-                    DU[6 * j + r] = v;
-                }
-            for (r = 0; r < 6; r++)
-                for (i = r; i < 6; i++) {
-                    double v = IA[6 * r + i];
-                    for (j = 0; j < d; j++) v -= U[6 * j + r] * DU[6 * j + i];
-                    Ia[6 * r + i] = Ia[6 * i + r] = v;
-                }
+            if ((st = backward_general(L, jt, nd, Ia, pa)) != AQS_OK) return st;
+            if (jt->parent < 0) continue;
         }
-        child_in_parent(L, e, &P);
-        spatial_inertia_to_parent(&P, Ia, tmp);
-        for (i = 0; i < 36; i++) a->IA[36 * p + i] += tmp[i];
-        spatial_xform_force_back(&P, pa, tmp);
-        for (i = 0; i < 6; i++) a->pA[6 * p + i] += tmp[i];
+        {
+            aba_node *pn = &a->node[jt->parent];
+            inertia_to_parent_add(&nd->X, Ia, pn->IA);
+            force_to_parent_add(&nd->X, pa, pn->pA);
+        }
     }
     return AQS_OK;
+}
+
+static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, double *ac)
+{
+    const aba_state *a = &L->aba;
+    const joint_def *jd = &L->joints[jt->joint];
+    const double *U = a->Um + 6 * jt->voff, *u = a->um + jt->voff;
+    double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
+    int d = joint_nv(jt->type), i, j;
+    joint_subspace(jd, L->q + jt->qoff, S);
+    (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
+    for (j = 0; j < d; j++) {
+        double v = u[j];
+        for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
+        rhs[j] = v;
+    }
+    for (j = 0; j < d; j++) {
+        double v = 0.0;
+        for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
+        qdd[j] = v;
+    }
+    for (i = 0; i < 6; i++) {
+        double v = 0.0;
+        for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
+        ac[i] += v;
+    }
 }
 
 static void forward(aqs_linkage *L)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double *acc = a->acc;
-    int32_t k, i, j;
+    double g[6];
+    int32_t k, i;
     for (i = 0; i < 3; i++) {
-        acc[6 * m->ncomp + i] = 0.0;
-        acc[6 * m->ncomp + 3 + i] = -L->gravity[i];
+        g[i] = 0.0;
+        g[3 + i] = -L->gravity[i];
     }
     for (k = 0; k < m->ne; k++) {
-        int32_t e = a->order[k], c = m->eff_child[e], p = m->eff_parent[e];
-        const joint_def *jd = &L->joints[m->eff_joint[e]];
-        const double *U = a->U + 6 * jd->voff, *u = a->u + jd->voff;
-        const double *IA = a->IA + 36 * c, *pA = a->pA + 6 * c;
-        double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jd->voff, *ac = acc + 6 * c;
-        double *f = L->cforce + 6 * (size_t)m->eff_joint[e];
-        int d = joint_nv(jd->type);
-        pose P;
-        child_in_parent(L, e, &P);
-        spatial_xform_motion(&P, acc + 6 * p, ac); /* a' = X a_p */
-        joint_subspace(jd, L->q + jd->qoff, S);
-        if (d == 1) {
-            double D = 0.0, v = u[0];
-            for (i = 0; i < 6; i++) {
-                D += S[i] * U[i];
-                v -= U[i] * ac[i];
-            }
-            qdd[0] = v / D; /* D > 0: checked in the backward pass */
-            for (i = 0; i < 6; i++) ac[i] += S[i] * qdd[0];
+        const aba_joint *jt = &a->joint[k];
+        aba_node *nd = &a->node[k];
+        const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
+        double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
+        motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
+        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+            const double *U = nd->v.s.U, *x = jt->axis;
+            double qdd = (nd->u - (U[0] * ac[0] + U[1] * ac[1] + U[2] * ac[2] + U[3] * ac[3] + U[4] * ac[4] +
+                                   U[5] * ac[5])) * nd->Dinv;
+            L->qdd[jt->voff] = qdd;
+            i = jt->type == AQS_JOINT_REVOLUTE ? 0 : 3;
+            ac[i] += x[0] * qdd;
+            ac[i + 1] += x[1] * qdd;
+            ac[i + 2] += x[2] * qdd;
         } else {
-            (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
-            for (j = 0; j < d; j++) {
-                double v = u[j];
-                for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
-                rhs[j] = v;
-            }
-            for (j = 0; j < d; j++) {
-                double v = 0.0;
-                for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
-                qdd[j] = v;
-            }
-            for (i = 0; i < 6; i++) {
-                double v = 0.0;
-                for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
-                ac[i] += v;
-            }
+            forward_general(L, jt, nd, ac);
         }
-        dense_matvec6(IA, ac, f);
-        for (i = 0; i < 6; i++) f[i] += pA[i];
+        inertia_mul(nd->IA, ac, f);
+        for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
+        memset(nd->pA, 0, sizeof nd->pA);
     }
 }
 
@@ -237,6 +533,8 @@ static void welded_forces(aqs_linkage *L)
     const model *m = &L->m;
     const tree *t = &L->t;
     int32_t c, h, i;
+    if (m->nwelded == 0) return;
+    AQS_ASSERT(t->poses != NULL); /* the leaves' handle poses: allocated at finalize */
     for (c = 0; c <= m->ncomp; c++) {
         const node *leaf;
         double *x;
@@ -249,8 +547,11 @@ static void welded_forces(aqs_linkage *L)
             if (m->eff_child[e] == c) {
                 memcpy(x + 6 * h, f, 6 * sizeof(double));
             } else {
+                const joint_def *jd = &L->joints[m->eff_joint[e]];
                 double fj[6];
-                spatial_xform_force_back(t->poses + t->nodes[t->node_of_eff[e]].J, f, fj);
+                pose J;
+                joint_child_pose(jd, L->q + jd->qoff, &J);
+                spatial_xform_force_back(&J, f, fj);
                 for (i = 0; i < 6; i++) x[6 * h + i] = -fj[i];
             }
         }
@@ -261,10 +562,22 @@ static void welded_forces(aqs_linkage *L)
 aqs_status aba_solve(aqs_linkage *L)
 {
     aqs_status st;
+    /* World poses for the loads: from the sweep when the tree's are stale
+     * (the tree's take O(log N) per loaded body when current). */
+    int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
+    if (L->aba.dirty) reset_nodes(L);
+    if (world) world_for_loads(L);
+    L->aba.world_valid = world;
     update_loads(L); /* the composites' loads in their frames */
-    if ((st = backward(L)) != AQS_OK) return st;
+    L->aba.world_valid = 0;
+    if ((st = backward(L)) != AQS_OK) {
+        L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
+        return st;
+    }
     forward(L);
+    L->aba.x_valid = 1;
     welded_forces(L);
+    L->aba.x_valid = 0;
     adaptive_mark_exact(L);
     L->t.nodes_updated = 0;
     L->t.factors_updated = 0;

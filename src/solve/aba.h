@@ -15,5 +15,6 @@ void aba_free(aqs_linkage *L);
  * as an exact solve. Returns AQS_OK, or AQS_ENUMERIC (message set) when an
  * articulated inertia is numerically singular. */
 aqs_status aba_solve(aqs_linkage *L);
+/* The poses and inertias read from the solver's order: kintree.h. */
 
 #endif

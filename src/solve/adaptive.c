@@ -396,8 +396,7 @@ void adaptive_integrate(aqs_linkage *L, double h)
             const joint_def *jd = &L->joints[L->m.eff_joint[i]];
             joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
         }
-        frames_all(L);
-        stale_positions(L, -1);
+        frames_positions_moved(L);
     } else {
         for (i = 0; i < s->nprocessed; i++) {
             const joint_def *jd = &L->joints[L->m.eff_joint[t->nodes[s->processed[i]].joint]];

@@ -5,7 +5,10 @@
 #include "frames.h"
 
 #include "collide.h"
+#include "check.h"
 #include "invariant.h"
+#include "kintree.h"
+#include "stale.h"
 
 void frames_leaf(aqs_linkage *L, int32_t n)
 {
@@ -16,7 +19,7 @@ void frames_leaf(aqs_linkage *L, int32_t n)
     for (i = 0; i < nd->nh; i++) {
         int32_t e = t->handles[nd->handles + i];
         if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
-        else P[i] = L->m.eff_place[e];                             /* holds e up: joint frame */
+        else P[i] = *kin_eff_place(L, e);                          /* holds e up: joint frame */
     }
 }
 
@@ -57,15 +60,54 @@ void frames_all(aqs_linkage *L)
 void frames_from_joint(aqs_linkage *L, int32_t e)
 {
     int32_t n = L->t.node_of_eff[e];
+    if (L->t.poses_stale) return; /* recomputed in full when read */
     for (; n >= 0; n = L->t.nodes[n].parent) frames_node(L, n);
 }
 
-void frames_comp_world(const aqs_linkage *L, int32_t comp, pose *P)
+void frames_positions_moved(aqs_linkage *L)
+{
+    if (L->col) frames_all(L);
+    else stale_poses(L);
+    stale_positions(L, -1);
+}
+
+aqs_status frames_poses_alloc(aqs_linkage *L)
+{
+    tree *t = &L->t;
+    int32_t n;
+    if (t->poses) return AQS_OK;
+    t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
+    if (!t->poses)
+        return lk_fail(L, AQS_ENOMEM, "out of memory for the assembly tree's %lld poses", (long long)t->nposes);
+    for (n = 0; n < t->nnodes; n++)
+        if (t->nodes[n].joint < 0) frames_leaf(L, n);
+    stale_poses(L);
+    return AQS_OK;
+}
+
+aqs_status frames_poses(aqs_linkage *L)
+{
+    aqs_status st;
+    if (!L->t.poses_stale) return AQS_OK;
+    if ((st = frames_poses_alloc(L)) != AQS_OK) return st;
+    frames_all(L);
+    stale_poses_fresh(L);
+    return AQS_OK;
+}
+
+void frames_comp_world(aqs_linkage *L, int32_t comp, pose *P)
 {
     const tree *t = &L->t;
     int32_t n, parent;
+    if (t->poses_stale && (!t->poses || L->aba.x_valid)) {
+        /* no tree poses (never needed so far), or inside an exact solve:
+         * up the kinematic tree from the positions, O(depth) */
+        kin_comp_world_walk(L, comp, P);
+        return;
+    }
     pose_identity(P);
     if (comp == L->m.ncomp || t->nnodes == 0) return;
+    (void)frames_poses(L); /* allocated: only recomputes (no failure) */
     /* Walk up: a B child's frame is its parent's frame times A's handle k
      * times J(q_k); an A child shares its parent's frame. */
     for (n = t->leaf_of_comp[comp]; (parent = t->nodes[n].parent) >= 0; n = parent) {
@@ -79,30 +121,15 @@ void frames_comp_world(const aqs_linkage *L, int32_t comp, pose *P)
     }
 }
 
-void frames_body_world(const aqs_linkage *L, int32_t body, pose *P)
+void frames_body_world(aqs_linkage *L, int32_t body, pose *P)
 {
     pose C;
     frames_comp_world(L, L->m.comp_of_body[body], &C);
     pose_compose(&C, &L->m.body_in_comp[body], P);
 }
 
-void frames_all_bodies_world(const aqs_linkage *L, pose *out)
-{
-    int32_t k;
-    for (k = 0; k < L->nbodies; k++) {
-        int32_t b = L->m.order[k];
-        const joint_def *jd = &L->joints[L->m.parent_joint[b]];
-        pose place, J, jp;
-        pose_from_quat(jd->pos, jd->quat, &place);
-        joint_child_pose(jd, L->q + jd->qoff, &J);
-        pose_compose(&place, &J, &jp);
-        if (jd->parent == AQS_WORLD) out[b] = jp;
-        else pose_compose(&out[jd->parent], &jp, &out[b]);
-    }
-}
-
 void frames_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
-                         double f[6])
+                              double f[6])
 {
     const body_load *ld = &L->loads[body];
     const pose *bc = &L->m.body_in_comp[body];

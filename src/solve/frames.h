@@ -14,15 +14,30 @@ void frames_leaf(aqs_linkage *L, int32_t n);
 void frames_node(aqs_linkage *L, int32_t n);
 /* All internal nodes' cross poses, children first. O(N). */
 void frames_all(aqs_linkage *L);
-/* Cross poses of the node of effective joint e and its ancestors. O(log N). */
+/* Cross poses of the node of effective joint e and its ancestors. O(log N).
+ * Nothing while every pose is stale (frames_poses recomputes them all). */
 void frames_from_joint(aqs_linkage *L, int32_t e);
+/* Every position may have moved: the internal poses follow at once when
+ * collision shapes exist (their bounding spheres follow the poses), else
+ * they are left stale until frames_poses; the coefficients and the
+ * world-frame loads are marked stale either way. */
+void frames_positions_moved(aqs_linkage *L);
+/* The tree's poses exist (allocated on first use, O(N) memory: an exact
+ * solve by the articulated-body algorithm never reads the internal ones)
+ * with every leaf's set (constant); the internal ones may be stale. AQS_OK
+ * or AQS_ENOMEM (message set, nothing changed). */
+aqs_status frames_poses_alloc(aqs_linkage *L);
+/* The internal poses too, recomputed if stale: before anything reads them
+ * (the DCA update, world poses through the tree, collision). O(N) when
+ * stale. AQS_OK or AQS_ENOMEM (from frames_poses_alloc). */
+aqs_status frames_poses(aqs_linkage *L);
 
-/* World pose of a composite's frame (world: identity), O(log N). */
-void frames_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
+/* World pose of a composite's frame (world: identity), O(log N) through
+ * the tree's poses (recomputed first if stale: O(N) once); O(depth) up the
+ * kinematic tree when the tree holds no poses, or inside an exact solve. */
+void frames_comp_world(aqs_linkage *L, int32_t comp, pose *P);
 /* World pose of a body, O(log N). */
-void frames_body_world(const aqs_linkage *L, int32_t body, pose *P);
-/* World poses of all bodies, parents before children, O(N). */
-void frames_all_bodies_world(const aqs_linkage *L, pose *out);
+void frames_body_world(aqs_linkage *L, int32_t body, pose *P);
 
 /* The load of a body as a spatial force in its composite's frame, given the
  * composite's world pose. */

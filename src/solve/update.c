@@ -9,6 +9,7 @@
 #include "dense.h"
 #include "frames.h"
 #include "invariant.h"
+#include "kintree.h"
 #include "stale.h"
 #include "totalacc.h"
 
@@ -49,7 +50,8 @@ void update_loads(aqs_linkage *L)
             m->comp_loaded[c] = 1;
             m->loaded_comps[m->nloaded_comps++] = c;
         }
-        frames_comp_world(L, c, &Pc);
+        if (L->aba.world_valid) kin_comp_world(L, c, &Pc); /* the exact solve's own sweep */
+        else frames_comp_world(L, c, &Pc);
         frames_load_in_comp(L, b, &Pc, f);
         for (i = 0; i < 6; i++) m->comp_force[6 * c + i] += f[i];
     }
@@ -117,6 +119,7 @@ aqs_status update_coefficients(aqs_linkage *L)
     aqs_status st = AQS_OK;
     int32_t k;
     if (t->nnodes == 0) return AQS_OK;
+    if ((st = frames_poses(L)) != AQS_OK) return st; /* left stale by moves since the last update */
     t->factors_updated = 0;
     if (t->all_dirty) {
         stale_loads_all(L);

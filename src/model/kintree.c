@@ -1,0 +1,53 @@
+/* kintree.c -- poses and inertias read from the kinematic tree in
+ * depth-first order (kintree.h). */
+#include "kintree.h"
+
+void kin_comp_world(const aqs_linkage *L, int32_t comp, pose *P)
+{
+    *P = L->aba.node[L->aba.pos_of_comp[comp]].v.world;
+}
+
+void kin_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36])
+{
+    kin_unpack_inertia(L->aba.joint[L->aba.pos_of_comp[comp]].I, I);
+}
+
+const pose *kin_eff_place(const aqs_linkage *L, int32_t e)
+{
+    return &L->aba.joint[L->aba.pos_of_comp[L->m.eff_child[e]]].place;
+}
+
+void kin_world_poses(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    for (k = 0; k < L->m.ne; k++) {
+        const aba_joint *jt = &a->joint[k];
+        pose X;
+        kin_joint_pose(L, jt, &X);
+        if (jt->parent < 0) a->node[k].v.world = X;
+        else pose_compose(&a->node[jt->parent].v.world, &X, &a->node[k].v.world);
+    }
+}
+
+void kin_body_world(const aqs_linkage *L, int32_t body, pose *P)
+{
+    const model *m = &L->m;
+    int32_t c = m->comp_of_body[body];
+    if (c == m->ncomp) *P = m->body_in_comp[body]; /* welded to the world: its pose there */
+    else pose_compose(&L->aba.node[L->aba.pos_of_comp[c]].v.world, &m->body_in_comp[body], P);
+}
+
+void kin_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P)
+{
+    const aba_state *a = &L->aba;
+    int32_t k;
+    pose_identity(P);
+    if (comp == L->m.ncomp) return;
+    for (k = a->pos_of_comp[comp]; k >= 0; k = a->joint[k].parent) {
+        pose X, t;
+        kin_joint_pose(L, &a->joint[k], &X);
+        pose_compose(&X, P, &t);
+        *P = t;
+    }
+}

@@ -1,0 +1,73 @@
+/* kintree.h -- the kinematic tree of composites in depth-first order (the
+ * articulated-body solver's order, L->aba; built by aba_alloc): the
+ * per-joint constants it keeps (joint placements, packed inertias) and the
+ * poses computed from them and the positions, without the assembly tree.
+ * Below the solvers: the model's inertia readers and the frames use it. */
+#ifndef AQS_KINTREE_H
+#define AQS_KINTREE_H
+
+#include <string.h>
+
+#include "joint.h"
+#include "linkage.h"
+
+/* Packed symmetric 6x6 [A B; B^T C]: offsets of A, B, C. */
+enum { KIN_PA = 0, KIN_PB = 6, KIN_PC = 15 };
+
+static inline void kin_unpack_inertia(const double *P, double *F)
+{
+    int i, j, n = 0;
+    for (i = 0; i < 3; i++)
+        for (j = i; j < 3; j++) {
+            F[6 * i + j] = F[6 * j + i] = P[KIN_PA + n];
+            F[6 * (3 + i) + 3 + j] = F[6 * (3 + j) + 3 + i] = P[KIN_PC + n];
+            n++;
+        }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) F[6 * i + 3 + j] = F[6 * (3 + j) + i] = P[KIN_PB + 3 * i + j];
+}
+
+/* X: the composite's frame in its parent's, the joint placement composed
+ * with J(q). Revolute and prismatic joints written out. */
+static inline void kin_joint_pose(const aqs_linkage *L, const aba_joint *jt, pose *X)
+{
+    const double *R = jt->place.R, *q = L->q + jt->qoff;
+    int i;
+    if (jt->type == AQS_JOINT_REVOLUTE) {
+        double J[9];
+        rot_axis_angle(jt->axis, q[0], J);
+        for (i = 0; i < 3; i++) {
+            X->R[3 * i] = R[3 * i] * J[0] + R[3 * i + 1] * J[3] + R[3 * i + 2] * J[6];
+            X->R[3 * i + 1] = R[3 * i] * J[1] + R[3 * i + 1] * J[4] + R[3 * i + 2] * J[7];
+            X->R[3 * i + 2] = R[3 * i] * J[2] + R[3 * i + 1] * J[5] + R[3 * i + 2] * J[8];
+        }
+        memcpy(X->p, jt->place.p, sizeof X->p);
+    } else if (jt->type == AQS_JOINT_PRISMATIC) {
+        double t[3];
+        for (i = 0; i < 3; i++) t[i] = q[0] * jt->axis[i];
+        memcpy(X->R, R, sizeof X->R);
+        for (i = 0; i < 3; i++) X->p[i] = jt->place.p[i] + R[3 * i] * t[0] + R[3 * i + 1] * t[1] + R[3 * i + 2] * t[2];
+    } else {
+        pose J;
+        joint_child_pose(&L->joints[jt->joint], q, &J);
+        pose_compose(&jt->place, &J, X);
+    }
+}
+
+/* The world pose of a composite's frame from the exact solve's own pose
+ * sweep: valid only while L->aba.world_valid (update_loads inside aba_solve). */
+void kin_comp_world(const aqs_linkage *L, int32_t comp, pose *P);
+/* The spatial inertia of a composite (its frame, 6x6) from the solver's
+ * packed copy. */
+void kin_comp_inertia(const aqs_linkage *L, int32_t comp, double I[36]);
+/* The joint frame of effective joint e in its parent composite's frame. */
+const pose *kin_eff_place(const aqs_linkage *L, int32_t e);
+/* Every composite's world pose at the current positions into the solver's
+ * scratch (valid until the next solve), then kin_body_world per body. */
+void kin_world_poses(aqs_linkage *L);
+void kin_body_world(const aqs_linkage *L, int32_t body, pose *P);
+/* The world pose of a composite's frame from the positions, composing the
+ * joints' poses up the kinematic tree: O(depth), no tree poses read. */
+void kin_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P);
+
+#endif
