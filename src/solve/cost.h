@@ -15,20 +15,20 @@
 
 /* An internal node's DCA coefficients (dca_node_update), by DCA form
  * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
-#define COST_DCA_NODE_SQRT 38560.0
+#define COST_DCA_NODE_SQRT 28790.0
 #define COST_DCA_NODE_PHI 9230.0
 /* An internal node's total-acceleration factor (totalacc_node_update). */
-#define COST_FACTOR 5370.0
+#define COST_FACTOR 5360.0
 /* A node processed by the adaptive solve: dca_node_backsub, one
  * totalacc_eval, one heap_push and heap_pop. */
 #define COST_PROCESS 1260.0
 /* A node moved by an adaptive step: joint_integrate, frames_node. */
-#define COST_MOVE 520.0
+#define COST_MOVE 530.0
 /* The exact solve by the articulated-body algorithm (aba_solve), per
  * effective joint. */
-#define COST_ABA_JOINT 2340.0
+#define COST_ABA_JOINT 1520.0
 /* An exact step's move, per effective joint: joint_integrate, and
  * frames_all per joint. */
-#define COST_ABA_MOVE 540.0
+#define COST_ABA_MOVE 40.0
 
 #endif
