@@ -16,6 +16,7 @@
 #include "model.h"
 #include "stale.h"
 #include "totalacc.h"
+#include "worldbound.h"
 #include "update.h"
 
 #define STR2(x) #x
@@ -136,6 +137,7 @@ static void free_solver(aqs_linkage *L)
 {
     aba_free(L);
     adaptive_free(L);
+    worldbound_free(L);
     totalacc_free(L);
     assembly_free(L);
     model_free(L);
@@ -748,12 +750,17 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     aqs_status st;
     CHECK_LINKAGE(L);
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
-    if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_JOINT)
+    if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_WORLD)
         return lk_fail(L, AQS_EINVAL, "%s: metric = %d is not an AQS_METRIC_* value", fn, (int)metric);
     if (!isfinite(eps) || eps < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
     if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
         if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
+        stale_tree(L);
+    }
+    if (metric >= AQS_METRIC_ABS_WORLD && !L->wb && L->t.nnodes > 0) {
+        /* the bodies' spheres: computed for every node by the next update */
+        if ((st = worldbound_enable(L, fn)) != AQS_OK) return st;
         stale_tree(L);
     }
     L->s.metric = metric;

@@ -203,6 +203,7 @@ struct aqs_linkage {
     aba_state aba;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
     struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
+    struct worldbound *wb; /* the world-space measures' per-node data (src/worldbound.h); NULL until one is set */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;
