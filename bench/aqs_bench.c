@@ -95,7 +95,8 @@ typedef struct bench_run {
 } bench_run;
 
 static const char *const metric_names[] = {"abs_linkage", "rel_linkage", "abs_joint",
-                                           "rel_joint"};
+                                           "rel_joint",   "abs_world",   "rel_world"};
+#define BENCH_NMETRICS ((int)(sizeof metric_names / sizeof metric_names[0]))
 
 static int failed(aqs_status status, const aqs_linkage *linkage, const char *what)
 {
@@ -118,7 +119,8 @@ static void usage(FILE *f)
             "  --scene NAME       chain30 | chain | molecule | millipede (default molecule)\n"
             "  --joints N         size of chain and molecule (default 50000)\n"
             "  --forces LIST      N_f values, e.g. 1,10,100,1000 (default 1)\n"
-            "  --metric NAME      rel_joint | abs_joint | rel_linkage | abs_linkage\n"
+            "  --metric NAME      rel_joint | abs_joint | rel_linkage | abs_linkage |\n"
+            "                     rel_world | abs_world\n"
             "                     (default rel_joint)\n"
             "  --eps LIST         eps values: numbers, 2^-I, or ranges 2^-I..J\n"
             "                     (default 2^-19); 0 is exact on the adaptive linkage\n"
@@ -366,9 +368,9 @@ static int parse_options(int argc, char **argv, bench_options *o)
             }
             break;
         case OPT_METRIC:
-            for (k = 0; k < 4 && strcmp(val, metric_names[k]) != 0; ++k) {
+            for (k = 0; k < BENCH_NMETRICS && strcmp(val, metric_names[k]) != 0; ++k) {
             }
-            if (k == 4) {
+            if (k == BENCH_NMETRICS) {
                 fprintf(stderr, "aqs-bench: --metric: unknown measure '%s'\n", val);
                 return 1;
             }

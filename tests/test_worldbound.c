@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "joint.h"
+#include "scenes.h"
 #include "linkage.h"
 #include "update.h"
 #include "worldbound.h"
@@ -135,51 +136,61 @@ static double ell_of(const aqs_linkage *L, int32_t b)
 
 /* Linear acceleration of every body's centre of mass and its angular
  * acceleration (world frame, 3 + 3 per body) for joint accelerations qdd
- * at zero velocity: the sum over the joints on the body's path of the
- * joint's motion (S qdd in its child frame) carried to the centre of mass. */
+ * at zero velocity, by the forward recursion over the bodies (parents
+ * first): alpha_c = alpha_p + R_c S_ang qdd, the acceleration of c's origin
+ * a_c = a_p + alpha_p x (o_c - o_p) + R_c S_lin qdd, and at the centre of
+ * mass a_c + alpha_c x (com_c - o_c). */
 static void body_accels(aqs_linkage *L, const double *qdd, double *lin, double *ang)
 {
-    int32_t nb = L->nbodies, b;
+    int32_t nb = L->nbodies, k, b;
     double *com = malloc(sizeof(double) * 3 * (size_t)nb), *R = malloc(sizeof(double) * 9 * (size_t)nb);
-    double *org = malloc(sizeof(double) * 7 * (size_t)nb);
+    double *org = malloc(sizeof(double) * 7 * (size_t)nb), *ao = malloc(sizeof(double) * 3 * (size_t)nb);
     com_world(L, com, R);
     assert_int_equal(aqs_linkage_get_body_poses_world(L, org, 7 * (size_t)nb), AQS_OK);
-    for (b = 0; b < nb; b++) {
-        int32_t c = b;
+    for (k = 0; k < nb; k++) {
+        int32_t c = L->m.order[k], i;
+        const joint_def *jd = &L->joints[L->m.parent_joint[c]];
         double a[3] = {0, 0, 0}, w[3] = {0, 0, 0};
-        while (c != AQS_WORLD) {
-            const joint_def *jd = &L->joints[L->m.parent_joint[c]];
-            if (jd->type != AQS_JOINT_FIXED) {
-                double S[36] = {0}, sa[3] = {0, 0, 0}, sl[3] = {0, 0, 0}, wa[3], wl[3], r[3], x[3];
-                int d = joint_nv(jd->type), i, k;
-                joint_subspace(jd, L->q + jd->qoff, S);
-                for (i = 0; i < 3; i++)
-                    for (k = 0; k < d; k++) {
-                        sa[i] += S[i * d + k] * qdd[jd->voff + k];
-                        sl[i] += S[(i + 3) * d + k] * qdd[jd->voff + k];
-                    }
-                for (i = 0; i < 3; i++) {
-                    const double *Rc = R + 9 * c;
-                    wa[i] = Rc[3 * i] * sa[0] + Rc[3 * i + 1] * sa[1] + Rc[3 * i + 2] * sa[2];
-                    wl[i] = Rc[3 * i] * sl[0] + Rc[3 * i + 1] * sl[1] + Rc[3 * i + 2] * sl[2];
-                    r[i] = com[3 * b + i] - org[7 * c + i];
-                }
-                x[0] = wa[1] * r[2] - wa[2] * r[1];
-                x[1] = wa[2] * r[0] - wa[0] * r[2];
-                x[2] = wa[0] * r[1] - wa[1] * r[0];
-                for (i = 0; i < 3; i++) {
-                    a[i] += wl[i] + x[i];
-                    w[i] += wa[i];
-                }
-            }
-            c = jd->parent;
+        if (jd->parent != AQS_WORLD) {
+            int32_t p = jd->parent;
+            double r[3];
+            for (i = 0; i < 3; i++) r[i] = org[7 * c + i] - org[7 * p + i];
+            for (i = 0; i < 3; i++) w[i] = ang[3 * p + i];
+            a[0] = ao[3 * p] + w[1] * r[2] - w[2] * r[1];
+            a[1] = ao[3 * p + 1] + w[2] * r[0] - w[0] * r[2];
+            a[2] = ao[3 * p + 2] + w[0] * r[1] - w[1] * r[0];
         }
-        memcpy(lin + 3 * b, a, sizeof a);
-        memcpy(ang + 3 * b, w, sizeof w);
+        if (jd->type != AQS_JOINT_FIXED) {
+            double S[36] = {0}, sa[3] = {0, 0, 0}, sl[3] = {0, 0, 0};
+            const double *Rc = R + 9 * c;
+            int d = joint_nv(jd->type), kk;
+            joint_subspace(jd, L->q + jd->qoff, S);
+            for (i = 0; i < 3; i++)
+                for (kk = 0; kk < d; kk++) {
+                    sa[i] += S[i * d + kk] * qdd[jd->voff + kk];
+                    sl[i] += S[(i + 3) * d + kk] * qdd[jd->voff + kk];
+                }
+            for (i = 0; i < 3; i++) {
+                w[i] += Rc[3 * i] * sa[0] + Rc[3 * i + 1] * sa[1] + Rc[3 * i + 2] * sa[2];
+                a[i] += Rc[3 * i] * sl[0] + Rc[3 * i + 1] * sl[1] + Rc[3 * i + 2] * sl[2];
+            }
+        }
+        memcpy(ang + 3 * c, w, sizeof w);
+        memcpy(ao + 3 * c, a, sizeof a);
+    }
+    for (b = 0; b < nb; b++) {
+        const double *w = ang + 3 * b;
+        double r[3];
+        int i;
+        for (i = 0; i < 3; i++) r[i] = com[3 * b + i] - org[7 * b + i];
+        lin[3 * b] = ao[3 * b] + w[1] * r[2] - w[2] * r[1];
+        lin[3 * b + 1] = ao[3 * b + 1] + w[2] * r[0] - w[0] * r[2];
+        lin[3 * b + 2] = ao[3 * b + 2] + w[0] * r[1] - w[1] * r[0];
     }
     free(com);
     free(R);
     free(org);
+    free(ao);
 }
 
 static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
@@ -524,6 +535,54 @@ static void test_bound_trajectories(void **state)
     assert_true(ne_on >= ne_off); /* it only ever computes more */
 }
 
+/* The paper's scenes (bench/scenes.c) with the benchmark's kind of load: a
+ * 1 N pull on one body (chain30: at the tip's far end), gravity off; the
+ * bound at every eps and over a few steps of a trajectory. */
+static aqs_linkage *scene(bench_scene_kind kind, int32_t size)
+{
+    aqs_linkage *L;
+    int32_t body;
+    const double f[3] = {0.3, 0.8, -0.52}, z[3] = {0, 0, 0}, tip[3] = {1, 0, 0};
+    assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(bench_build_scene(L, kind, size), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    body = kind == BENCH_SCENE_CHAIN30 ? bench_chain30_tip_body()
+           : kind == BENCH_SCENE_MILLIPEDE ? bench_millipede_leg_body(400, 9)
+                                           : L->nbodies / 3;
+    assert_int_equal(aqs_body_set_force(L, body, f, kind == BENCH_SCENE_CHAIN30 ? tip : z, z), AQS_OK);
+    return L;
+}
+
+static void test_bound_scenes(void **state)
+{
+    static const struct {
+        bench_scene_kind kind;
+        int32_t size;
+    } scenes[] = {{BENCH_SCENE_CHAIN30, 30}, {BENCH_SCENE_MOLECULE, 3000}, {BENCH_SCENE_MILLIPEDE, 0}};
+    tally t = {0, 0, 0, 0, 0};
+    size_t c;
+    (void)state;
+    for (c = 0; c < sizeof scenes / sizeof scenes[0]; c++) {
+        aqs_linkage *L = scene(scenes[c].kind, scenes[c].size), *X = scene(scenes[c].kind, scenes[c].size);
+        int step;
+        check_linkage(L, X, 1e-12, &t);
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, ldexp(1.0, -15)), AQS_OK);
+        for (step = 0; step < 6; step++) {
+            twin_positions(L, X);
+            assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+            if (aqs_linkage_step(L, 0.3) != AQS_OK) fail_msg("step: %s", aqs_linkage_last_error(L));
+            check_one(L, X, AQS_METRIC_REL_WORLD, ldexp(1.0, -15), 1e-12, &t);
+        }
+        aqs_linkage_destroy(L);
+        aqs_linkage_destroy(X);
+    }
+    print_message("world bound, scenes: %ld checks, %ld violations, worst true/bound %.9f\n", t.checks,
+                  t.violations, t.worst_ratio);
+    assert_int_equal(t.violations, 0);
+    assert_true(t.checks == 3 * (2 * 11 + 6));
+}
+
 /* ------------------------------------------------------------ the spheres */
 
 /* World pose of node n's frame: the frame of the leaf reached by A children. */
@@ -626,6 +685,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_body_accel_fd),   cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_bound_hard),      cmocka_unit_test(test_bound_trajectories),
+        cmocka_unit_test(test_bound_scenes),
         cmocka_unit_test(test_spheres_lazy),    cmocka_unit_test(test_api),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
