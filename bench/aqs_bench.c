@@ -58,7 +58,9 @@ typedef struct bench_options {
     int32_t size;
     int32_t forces[BENCH_MAX_LIST];
     int nforces;
-    int32_t metric;
+    int32_t metric;  /* the one in force (the current item of metrics) */
+    int32_t metrics[BENCH_MAX_LIST];
+    int nmetrics;
     double eps[BENCH_MAX_LIST];
     int eps_log2[BENCH_MAX_LIST]; /* -1: not a power of two */
     int neps;
@@ -128,8 +130,9 @@ static void usage(FILE *f)
             "  --scene NAME       chain30 | chain | molecule | millipede (default molecule)\n"
             "  --joints N         size of chain and molecule (default 50000)\n"
             "  --forces LIST      N_f values, e.g. 1,10,100,1000 (default 1)\n"
-            "  --metric NAME      rel_joint | abs_joint | rel_linkage | abs_linkage |\n"
-            "                     rel_world | abs_world\n"
+            "  --metric LIST      rel_joint | abs_joint | rel_linkage | abs_linkage |\n"
+            "                     rel_world | abs_world, or several separated by commas\n"
+            "                     (each eps is run for each, against one exact reference)\n"
             "                     (default rel_joint)\n"
             "  --eps LIST         eps values: numbers, 2^-I, or ranges 2^-I..J\n"
             "                     (default 2^-19); 0 is exact on the adaptive linkage\n"
@@ -324,6 +327,8 @@ static int parse_options(int argc, char **argv, bench_options *o)
     o->forces[0] = 1;
     o->nforces = 1;
     o->metric = AQS_METRIC_REL_JOINT;
+    o->metrics[0] = AQS_METRIC_REL_JOINT;
+    o->nmetrics = 1;
     o->eps[0] = ldexp(1.0, -19);
     o->eps_log2[0] = 19;
     o->neps = 1;
@@ -376,15 +381,29 @@ static int parse_options(int argc, char **argv, bench_options *o)
                 return 1;
             }
             break;
-        case OPT_METRIC:
-            for (k = 0; k < BENCH_NMETRICS && strcmp(val, metric_names[k]) != 0; ++k) {
+        case OPT_METRIC: {
+            /* a comma-separated list: each eps is run for each measure,
+             * against one exact reference run */
+            const char *p = val;
+            o->nmetrics = 0;
+            for (;;) {
+                size_t len = strcspn(p, ",");
+                for (k = 0; k < BENCH_NMETRICS && (strlen(metric_names[k]) != len ||
+                                                   strncmp(p, metric_names[k], len) != 0); ++k) {
+                }
+                if (k == BENCH_NMETRICS || o->nmetrics == BENCH_MAX_LIST) {
+                    fprintf(stderr, "aqs-bench: --metric: unknown measure in '%s'\n", val);
+                    return 1;
+                }
+                o->metrics[o->nmetrics++] = (int32_t)k;
+                if (p[len] == '\0') {
+                    break;
+                }
+                p += len + 1;
             }
-            if (k == BENCH_NMETRICS) {
-                fprintf(stderr, "aqs-bench: --metric: unknown measure '%s'\n", val);
-                return 1;
-            }
-            o->metric = (int32_t)k;
+            o->metric = o->metrics[0];
             break;
+        }
         case OPT_STEPS:
         case OPT_REPEATS:
         case OPT_EXACT_EVERY:
@@ -1054,10 +1073,14 @@ static int run_forces(bench_state *b, int32_t nf)
         }
         ref[rep] = 1e3 * ref_run.median_s;
     }
-    for (ei = 0; ei < o->neps; ++ei) {
+    for (ei = 0; ei < o->neps * o->nmetrics; ++ei) {
         double ms_med, ex_med, dc_med, ref_med;
+        ((bench_options *)o)->metric = o->metrics[ei / o->neps];
+        if (o->nmetrics > 1 && ei % o->neps == 0 && !o->quiet) {
+            printf("-- metric %s\n", metric_names[o->metric]);
+        }
         for (rep = 0; rep < R; ++rep) {
-            if (adaptive_run(b, nf, o->eps[ei], dt, rep == 0, rep == 0 ? &first : &r) != 0) {
+            if (adaptive_run(b, nf, o->eps[ei % o->neps], dt, rep == 0, rep == 0 ? &first : &r) != 0) {
                 goto out;
             }
             ms[rep] = 1e3 * (rep == 0 ? first.median_s : r.median_s);
@@ -1069,8 +1092,8 @@ static int run_forces(bench_state *b, int32_t nf)
         dc_med = bench_median(dc, (size_t)R);
         memcpy(ms, ref, sizeof(double) * (size_t)R);
         ref_med = bench_median(ms, (size_t)R);
-        write_json(b, nf, ei, dt, &first, ms_med, ex_med, dc_med, ref_med);
-        print_row(b, nf, ei, &first, ms_med, ex_med, dc_med);
+        write_json(b, nf, ei % o->neps, dt, &first, ms_med, ex_med, dc_med, ref_med);
+        print_row(b, nf, ei % o->neps, &first, ms_med, ex_med, dc_med);
     }
     rc = 0;
 out:
@@ -1141,10 +1164,10 @@ int main(int argc, char **argv)
     {
         const long K = opt.steps;
         const long chunks = (K + 2) / 3 > K / opt.exact_every ? (K + 2) / 3 : K / opt.exact_every;
-        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * (K + 2 * chunks + 1));
+        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * opt.nmetrics * (K + 2 * chunks + 1));
     }
     if (!opt.quiet) {
-        printf("metric %s; %d steps per run, %d repeat(s); force seed %llu; dt: the fastest "
+        printf("metric %s%s; %d steps per run, %d repeat(s); force seed %llu; dt: the fastest "
                "joint moves %.3g in the first exact step\n"
                "ms/step, exact ms (articulated-body algorithm, the default exact solver) and DCA ms "
                "(exact by the DCA): medians (exact steps interleaved with the adaptive run); "
@@ -1152,7 +1175,7 @@ int main(int argc, char **argv)
                "max_i |d_i - d_i^exact| / max_i |d_i^exact| (centres of mass) after the run; err/steps = "
                "that / steps; mean err = its mean over the steps (the paper's 'per time step', two "
                "readings)\n",
-               metric_names[opt.metric], (int)opt.steps, (int)opt.repeats,
+               metric_names[opt.metric], opt.nmetrics > 1 ? " (and the others of --metric)" : "", (int)opt.steps, (int)opt.repeats,
                (unsigned long long)opt.seed, opt.first_move);
         printf("%6s %7s %6s %10s %10s %9s %10s %9s %10s %10s %6s %10s %10s %10s %10s\n", "N_f", "eps",
                "steps", "ms/step", "exact ms", "speedup", "DCA ms", "vs DCA", "N_E", "updated", "R",
