@@ -152,7 +152,7 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
     case AQS_METRIC_ABS_WORLD: return sum; /* sum of the queued E_n */
-    case AQS_METRIC_REL_WORLD: return sum > 0.0 ? sum / L->wb->lower : 0.0;
+    case AQS_METRIC_REL_WORLD: return sum > 0.0 ? sum / (L->wb ? L->wb->lower : 0.0) : 0.0;
     case AQS_METRIC_REL_LINKAGE: {
         /* A(root) = the computed joints' squares + the queued A (every joint
          * is in one or the other): used when the root's T was not updated */
@@ -218,7 +218,7 @@ static double stop_level(const aqs_linkage *L, double eps)
     const solve_state *s = &L->s;
     switch (s->metric) {
     case AQS_METRIC_REL_JOINT: return eps * eps * s->lower * s->lower;
-    case AQS_METRIC_REL_WORLD: return eps * eps * L->wb->lower * L->wb->lower;
+    case AQS_METRIC_REL_WORLD: return L->wb ? eps * eps * L->wb->lower * L->wb->lower : 0.0;
     case AQS_METRIC_REL_LINKAGE: return eps * eps * (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
     default: return eps * eps;
     }
