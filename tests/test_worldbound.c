@@ -680,6 +680,57 @@ static void test_api(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* Out of memory in set_tolerance (the world data or the factors): nothing
+ * changes, and a later call sets everything up (the spheres of every node
+ * computed: the solve's bound equals a linkage that never failed). */
+static void test_out_of_memory(void **state)
+{
+    long k, failures = 0;
+    (void)state;
+    for (k = 1; k <= 40; k++) {
+        counting_state cs = {0, 0, 0, 0, 0};
+        aqs_linkage *L = NULL, *R = test_new_linkage();
+        aqs_linkage *both[2];
+        aqs_solve_stats a, b;
+        int32_t i, w;
+        aqs_status st;
+        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, &cs, &L), AQS_OK);
+        both[0] = L;
+        both[1] = R;
+        for (w = 0; w < 2; w++) {
+            const double f[3] = {0, 1, 0}, z[3] = {0, 0, 0};
+            for (i = 0; i < 30; i++) {
+                test_add_body(both[w], 1.0, 0.5, 0, 0, 0.05);
+                test_add_joint(both[w], AQS_JOINT_REVOLUTE, i - 1, i, i ? 1.0 : 0.0, 0, 0, 0, 0.3, 1);
+            }
+            assert_int_equal(aqs_linkage_finalize(both[w]), AQS_OK);
+            assert_int_equal(aqs_body_set_force(both[w], 29, f, z, z), AQS_OK);
+        }
+        cs.fail_at = cs.count + k;
+        st = aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-3);
+        if (st == AQS_ENOMEM) {
+            failures++;
+            assert_null(L->wb);
+            test_assert_contains(aqs_linkage_last_error(L), "aqs_linkage_set_tolerance");
+        } else
+            assert_int_equal(st, AQS_OK);
+        cs.fail_at = 0;
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(R, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(R), AQS_OK);
+        a.size = b.size = sizeof a;
+        assert_int_equal(aqs_linkage_get_stats(L, &a), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(R, &b), AQS_OK);
+        assert_true(a.error_bound == b.error_bound && a.computed_joints == b.computed_joints);
+        aqs_linkage_destroy(L);
+        aqs_linkage_destroy(R);
+        assert_int_equal(cs.live, 0);
+    }
+    print_message("out of memory: %ld of 40 injected failures hit set_tolerance\n", failures);
+    assert_true(failures >= 8); /* the world data's 8 blocks at least */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -687,6 +738,7 @@ int main(void)
         cmocka_unit_test(test_bound_hard),      cmocka_unit_test(test_bound_trajectories),
         cmocka_unit_test(test_bound_scenes),
         cmocka_unit_test(test_spheres_lazy),    cmocka_unit_test(test_api),
+        cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
