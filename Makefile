@@ -1,8 +1,8 @@
 # aqs -- adaptive quasi-statics. See README.md.
 #   make            build/libaqs.so.X.Y.Z and build/libaqs.a (needs only a C compiler and
 #                   libccd; installs nothing)
-#   make check      every test (C, C++ reference, Python, install, ABI, a short fuzz run);
-#                   SANITIZE=1 under ASan/UBSan, DEBUG=1 at -O0; both check src/invariant.h's asserts
+#   make check      every test (layers, C, C++ reference, Python, install, ABI, a short fuzz run);
+#                   SANITIZE=1 under ASan/UBSan, DEBUG=1 at -O0; both check src/base/invariant.h's asserts
 #   make fuzz       build/fuzz/aqs_fuzz, the libFuzzer target (clang; docs/testing.md)
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
@@ -57,10 +57,13 @@ endif
 WARN := -Wall -Wextra $(WERROR_FLAG) -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wno-unused-parameter
 # The project's flags come first, the user's CPPFLAGS / CFLAGS after them (so -O3 or -g0
 # there wins, while -std=c99 -fPIC -fvisibility=hidden stay).
-# AQS_DEBUG (SANITIZE=1, DEBUG=1): the internal invariants of src/invariant.h are checked.
-CPPFLAGS_LIB := -DAQS_BUILDING_LIBRARY $(DEBUG_DEFS) -Iinclude -Isrc
+# AQS_DEBUG (SANITIZE=1, DEBUG=1): the internal invariants of src/base/invariant.h are checked.
+# src/ is one directory per layer (src/LAYERS, docs/design.md); its headers are found
+# through one -I per layer directory that holds headers, so an #include names the file only.
+SRC_INC := $(addprefix -I,$(sort $(patsubst %/,%,$(dir $(wildcard src/*/*.h)))))
+CPPFLAGS_LIB := -DAQS_BUILDING_LIBRARY $(DEBUG_DEFS) -Iinclude $(SRC_INC)
 CFLAGS_LIB := -std=c99 $(OPT) $(WARN) -fPIC -fvisibility=hidden $(SANFLAGS)
-CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude -Isrc $(SANFLAGS)
+CFLAGS_TEST := -std=c99 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude $(SRC_INC) $(SANFLAGS)
 CXXFLAGS_TEST := -std=c++17 $(OPT) -Wall -Wextra $(WERROR_FLAG) -Wno-unused-parameter -Iinclude \
                  -I/usr/include/eigen3 $(SANFLAGS)
 # libccd through pkg-config (module ccd) when it is there, else plain -lccd.
@@ -70,7 +73,7 @@ CCD_LIBS := $(shell pkg-config --libs ccd 2>/dev/null || echo -lccd)
 endif
 LDLIBS := $(CCD_LIBS) -lm
 
-# URDF loading (src/urdf.c) with expat, an optional feature: on when
+# URDF loading (src/api/urdf.c) with expat, an optional feature: on when
 # pkg-config finds expat, off with AQS_URDF=0 (the load functions then return
 # AQS_ESTATE saying so). AQS_URDF=1 insists on it.
 AQS_URDF ?= $(shell pkg-config --exists expat 2>/dev/null && echo 1 || echo 0)
@@ -79,7 +82,8 @@ CFLAGS_LIB += -DAQS_HAVE_EXPAT $(shell pkg-config --cflags expat 2>/dev/null)
 LDLIBS += $(or $(shell pkg-config --libs expat 2>/dev/null),-lexpat)
 endif
 
-SRCS := $(sort $(wildcard src/*.c))
+SRCS := $(sort $(wildcard src/*/*.c))
+SRC_HDRS := $(sort $(wildcard src/*/*.h))
 OBJS := $(patsubst src/%.c,$(BUILD)/obj/%.o,$(SRCS))
 SONAME := libaqs.so.$(MAJOR)
 SHLIB := $(BUILD)/libaqs.so.$(VERSION)
@@ -97,7 +101,7 @@ BENCH_MAINS := bench/demo.c bench/aqs_bench.c $(wildcard bench/*_main.c) bench/c
 BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
-.PHONY: all lib check check-c check-reference check-python check-install check-symbols \
+.PHONY: all lib check check-c check-reference check-python check-install check-symbols check-layers \
         check-abi abi-baseline deps demo bench bench-scaling bench-plots bench-collide \
         check-bench install uninstall clean
 
@@ -128,7 +132,7 @@ else
 BUILD_PREREQ := $(CCD_STAMP)
 endif
 
-$(BUILD)/obj/%.o: src/%.c $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
+$(BUILD)/obj/%.o: src/%.c $(SRC_HDRS) include/aqs.h | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
 	@$(CC) $(CPPFLAGS_LIB) $(CPPFLAGS) $(CCD_CFLAGS) $(CFLAGS_LIB) $(CFLAGS) -c $< -o $@
@@ -172,8 +176,17 @@ $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.h
 	@$(CXX) $(CXXFLAGS_TEST) $(CPPFLAGS) $(CXXFLAGS) $(LDFLAGS) -o $@ $< -L$(BUILD) \
 	    -Wl,-rpath,$(abspath $(BUILD)) -laqs $(LDLIBS)
 
-check: check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench check-fuzz
+check: check-layers check-symbols check-abi check-c check-reference check-hard check-python check-install check-bench check-fuzz
 	@echo "make check: all suites passed ($(if $(SANITIZE),sanitized,plain) build)"
+
+# One-way layers (src/LAYERS, docs/design.md): every call between the objects goes down a
+# layer or to a sibling its line lists, checked from the objects' undefined symbols; then
+# the checker's own test (generated objects and bad maps that must fail).
+check-layers: $(OBJS)
+	@$(PYTHON) tests/check_layers.py --layers src/LAYERS --src src --objdir $(BUILD)/obj
+	@$(PYTHON) tests/check_layers_test.py "$(CC)" $(BUILD)/obj > $(BUILD)/check_layers_test.log \
+	    || { cat $(BUILD)/check_layers_test.log; exit 1; }
+	@tail -n 1 $(BUILD)/check_layers_test.log
 
 # Exports of the shared library; globals of the static library (all aqs-prefixed, and a
 # program defining the internal archive's names links against it).
@@ -359,15 +372,15 @@ clean:
 FUZZ_CC ?= clang
 FUZZ_RUNS ?= 20000
 FUZZ := build/fuzz/aqs_fuzz
-FUZZ_SRC := -DAQS_BUILDING_LIBRARY -DAQS_DEBUG -Iinclude -Isrc $(CCD_CFLAGS) $(SRCS)
+FUZZ_SRC := -DAQS_BUILDING_LIBRARY -DAQS_DEBUG -Iinclude $(SRC_INC) $(CCD_CFLAGS) $(SRCS)
 .PHONY: fuzz check-fuzz
 fuzz: $(FUZZ)
-$(FUZZ): tests/fuzz/api_fuzz.c $(SRCS) $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
+$(FUZZ): tests/fuzz/api_fuzz.c $(SRCS) $(SRC_HDRS) include/aqs.h | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CLANG   $@"
 	@$(FUZZ_CC) -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	    -o $@ tests/fuzz/api_fuzz.c $(FUZZ_SRC) $(LDLIBS)
-build/fuzz/test_stale_ubsan: tests/test_stale.c $(TEST_SUPPORT) $(SRCS) $(wildcard src/*.h) include/aqs.h | $(BUILD_PREREQ)
+build/fuzz/test_stale_ubsan: tests/test_stale.c $(TEST_SUPPORT) $(SRCS) $(SRC_HDRS) include/aqs.h | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CLANG   $@"
 	@$(FUZZ_CC) -std=c99 -O1 -g -fsanitize=undefined,pointer-overflow -fno-sanitize-recover=all \

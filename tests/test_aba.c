@@ -1,4 +1,4 @@
-/* test_aba.c -- the exact solve by the articulated-body algorithm (src/aba.c)
+/* test_aba.c -- the exact solve by the articulated-body algorithm (src/solve/aba.c)
  * against the DCA back-substitution over the assembly tree (an independent
  * algorithm; both are compared with the dense Eigen solver in
  * tests/reference), a closed form, the tree left stale and recomputed, and

@@ -1,5 +1,5 @@
 /* test_alloc.c -- every allocation of a linkage goes through its allocator
- * (src/pool.c and every caller): a counting allocator proves that nothing
+ * (src/base/pool.c and every caller): a counting allocator proves that nothing
  * leaks and that solving and stepping allocate nothing; a failing allocator
  * driven over every allocation index k of a full scenario proves that each
  * failure returns AQS_ENOMEM from the call that allocates, changes nothing
@@ -315,7 +315,7 @@ static void test_tolerance_allocation_fails(void **state)
     }
 }
 
-/* ---- Collision (src/collide.c, src/broadphase.c): shapes, filters and
+/* ---- Collision (src/api/collide_api.c, src/collide/broadphase.c): shapes, filters and
  * exclusions allocate when added; the first query after finalize allocates
  * the per-node data; later queries, steps and a shapeless scene allocate
  * nothing. A failed call leaves the shape count and the contacts as they

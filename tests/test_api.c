@@ -1,4 +1,4 @@
-/* test_api.c -- src/api.c: the error paths of every public function.
+/* test_api.c -- src/api/api.c: the error paths of every public function.
  * NULL linkage and NULL pointers (AQS_EINVAL), bad indices (AQS_ERANGE),
  * NaN and +-Inf in every double argument (AQS_EINVAL), wrong phase
  * (AQS_ESTATE), wrong sizes (AQS_ESIZE / AQS_EINVAL as documented),

@@ -1,4 +1,4 @@
-/* test_assembly.c -- src/assembly.c: the assembly tree built by tree
+/* test_assembly.c -- src/model/assembly.c: the assembly tree built by tree
  * contraction (MATH.md §10), through aqs_linkage_get_tree_stats: node
  * counts, height bounds for chains, handle bounds for chains and random
  * trees, star-shaped linkages (one body with many children), and linkages

@@ -1,4 +1,4 @@
-/* test_collide.c -- the public collision API (src/collide.c): bad input
+/* test_collide.c -- the public collision API (src/api/collide_api.c): bad input
  * (status, message naming the argument and value, linkage unchanged),
  * filters (joined bodies, welded bodies, groups and masks, exclusions),
  * shapes on welded bodies following their rigid group (closed form),
@@ -434,7 +434,7 @@ static void test_collision_api_errors(void **state)
 
 /* aqs_linkage_get_query_stats: the size-versioned statistics agree with the
  * four-pointer getter and with the collision state's own counters (read
- * through src/collide.h), size covers what is written, and bad arguments
+ * through src/collide/collide.h), size covers what is written, and bad arguments
  * are AQS_EINVAL naming them. */
 static void test_query_stats(void **state)
 {

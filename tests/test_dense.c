@@ -1,4 +1,4 @@
-/* test_dense.c -- src/dense.c: the small dense kernels against naive loops,
+/* test_dense.c -- src/base/dense.c: the small dense kernels against naive loops,
  * and dense_spd_inverse on well-conditioned SPD matrices, on badly scaled
  * ones (mass ratios), on a numerically singular SPD matrix that defeats
  * Cholesky (the LU fallback), and its failures (-1). */

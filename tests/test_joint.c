@@ -1,4 +1,4 @@
-/* test_joint.c -- src/joint.c: sizes per type, the completing directions,
+/* test_joint.c -- src/model/joint.c: sizes per type, the completing directions,
  * the child pose as a function of q (against the header's definitions),
  * the motion subspace (against numerical differentiation of the pose),
  * integration on the manifold and the validation of positions. */

@@ -1,4 +1,4 @@
-/* test_model.c -- src/model.c through the public API: every validation rule
+/* test_model.c -- src/model/model.c through the public API: every validation rule
  * of aqs_body_add, aqs_joint_add and aqs_linkage_finalize with its status
  * code and a message naming the offending index or value; massless bodies
  * (accepted only when welded to mass or to the world); and a failed

@@ -1,4 +1,4 @@
-/* test_narrowphase.c -- the narrow phase (src/narrowphase.c) against closed
+/* test_narrowphase.c -- the narrow phase (src/collide/narrowphase.c) against closed
  * forms: sphere-sphere, sphere-box, capsule-capsule, box-box face / edge /
  * corner, cylinder and hull, under random rigid motions of the pair; touching
  * and separated by 1e-12 (also in rotated placements: sphere on a box or hull
@@ -397,7 +397,7 @@ static void test_size_ratio_1e4(void **state)
  * the other (sphere on a box or hull edge, on a cylinder's side; parallel
  * capsules): spurious contacts in 17-28% of the motions (docs/collision.md).
  * Every pair with a sphere or capsule is now decided from the exact distance
- * of its core (src/narrowphase.c), and those configurations are here too. */
+ * of its core (src/collide/narrowphase.c), and those configurations are here too. */
 static void test_separated_1e12_rotated(void **state)
 {
     uint64_t st = 19;

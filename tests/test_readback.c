@@ -1,4 +1,4 @@
-/* test_readback.c -- src/readback.c: aqs_body_get_inertial and
+/* test_readback.c -- src/api/readback.c: aqs_body_get_inertial and
  * aqs_joint_get_definition return what was added (after the documented
  * normalization: quaternion and axis divided by their norms, inertia
  * symmetrized), in every phase, for every joint type; NULL out pointers are

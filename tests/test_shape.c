@@ -1,4 +1,4 @@
-/* test_shape.c -- src/shape.c: size and hull validation, support points
+/* test_shape.c -- src/collide/shape.c: size and hull validation, support points
  * against brute force over sampled surface points, bounding spheres
  * enclosing every support point. */
 #include "testutil.h"

@@ -1,4 +1,4 @@
-/* test_spatial.c -- src/spatial.c: quaternions, rotations, poses, 6-D motion
+/* test_spatial.c -- src/base/spatial.c: quaternions, rotations, poses, 6-D motion
  * and force transforms, spatial inertias (MATH.md §1).
  *
  * Reference values come from formulas written independently in the test

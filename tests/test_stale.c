@@ -1,4 +1,4 @@
-/* test_stale.c -- what a change or a failure makes stale (src/stale.c), on
+/* test_stale.c -- what a change or a failure makes stale (src/model/stale.c), on
  * the four defects its absence caused (issue 13):
  *   (a) an adaptive solve failing in the coefficient update leaves no
  *       readable results (AQS_ESTATE, as for the exact path), and the next

@@ -1,5 +1,5 @@
-/* test_urdf.c -- src/names.c (body and joint names, joint limits) and
- * src/urdf.c (the URDF loader).
+/* test_urdf.c -- src/api/names.c (body and joint names, joint limits) and
+ * src/api/urdf.c (the URDF loader).
  *
  * References: the numbers written in the URDF documents themselves, and
  * rotations built here by Rodrigues' formula (tests/support), not by the

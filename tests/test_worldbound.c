@@ -14,7 +14,7 @@
 #include "joint.h"
 #include "scenes.h"
 #include "linkage.h"
-#include "update.h"
+#include "frames.h"
 #include "worldbound.h"
 
 /* ------------------------------------------------------------ generators */
@@ -589,7 +589,7 @@ static void test_bound_scenes(void **state)
 static void node_world(const aqs_linkage *L, int32_t n, pose *P)
 {
     while (L->t.nodes[n].joint >= 0) n = L->t.nodes[n].a;
-    update_comp_pose_world(L, L->t.nodes[n].comp, P);
+    frames_comp_world(L, L->t.nodes[n].comp, P);
 }
 
 /* Every node's sphere (lazily updated over a trajectory) holds its bodies'

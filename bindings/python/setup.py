@@ -3,7 +3,7 @@
 `pip install ./bindings/python` (or `pip wheel ./bindings/python`) runs this
 through setuptools (pyproject.toml). The package itself is pure Python
 (ctypes); the one compiled file is the C library, built here as
-aqs/libaqs.so.MAJOR from the repository's src/*.c with the C compiler, the
+aqs/libaqs.so.MAJOR from the repository's src/*/*.c with the C compiler, the
 way the Makefile builds build/libaqs.so (same flags and version script; no
 -Werror), linked against libccd (Debian: libccd-dev to build, libccd2 at run
 time), and against expat for URDF loading when pkg-config finds it (Debian:
@@ -11,7 +11,7 @@ libexpat1-dev; AQS_URDF=0 leaves it out, as in the Makefile). The wheel is there
 (tag py3-none-<platform>).
 
 Where the C sources are, first found of:
-  $AQS_SOURCE_DIR                  a checkout (has include/aqs.h and src/*.c)
+  $AQS_SOURCE_DIR                  a checkout (has include/aqs.h and src/*/*.c)
   <this directory>/csrc            the copy an sdist carries
   <this directory>/../..           the repository this directory belongs to
 Environment: CC (default cc), CFLAGS, CPPFLAGS and LDFLAGS are added to the
@@ -44,18 +44,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 def _is_source_root(root):
     return (os.path.isfile(os.path.join(root, "include", "aqs.h"))
-            and bool(glob.glob(os.path.join(root, "src", "*.c"))))
+            and bool(glob.glob(os.path.join(root, "src", "*", "*.c"))))
 
 
 def source_root():
-    """The directory holding include/aqs.h and src/*.c (see the module docstring)."""
+    """The directory holding include/aqs.h and src/*/*.c (see the module docstring)."""
     candidates = [os.environ.get("AQS_SOURCE_DIR"), os.path.join(HERE, "csrc"),
                   os.path.join(HERE, "..", "..")]
     for root in candidates:
         if root and _is_source_root(root):
             return os.path.abspath(root)
     raise RuntimeError(
-        "aqs: cannot find the C sources of libaqs (include/aqs.h and src/*.c) in %s. Install "
+        "aqs: cannot find the C sources of libaqs (include/aqs.h and src/*/*.c) in %s. Install "
         "from the repository's bindings/python directory (pip install ./bindings/python), "
         "or set AQS_SOURCE_DIR to a checkout of the repository."
         % ", ".join(os.path.abspath(c) for c in candidates if c))
@@ -70,7 +70,7 @@ def header_version(root):
 
 
 def _urdf_support():
-    """Whether to build the URDF loader (src/urdf.c with expat), as the
+    """Whether to build the URDF loader (src/api/urdf.c with expat), as the
     Makefile decides: AQS_URDF=0/1 when set, else whether pkg-config finds
     expat (Debian: libexpat1-dev). Returns (cflags, libs)."""
     wanted = os.environ.get("AQS_URDF")
@@ -96,7 +96,8 @@ def _env_flags(name):
 
 
 class build_libaqs(build_ext):
-    """Compiles src/*.c into aqs/libaqs.so.MAJOR (instead of Python extensions)."""
+    """Compiles src/*/*.c (one directory per layer) into aqs/libaqs.so.MAJOR (instead of
+    Python extensions)."""
 
     def run(self):
         root = source_root()
@@ -111,16 +112,20 @@ class build_libaqs(build_ext):
         os.makedirs(objects_dir, exist_ok=True)
 
         cc = shlex.split(os.environ.get("CC") or "cc")
+        # One -I per layer directory that holds headers, as the Makefile's SRC_INC.
+        layer_dirs = sorted({os.path.dirname(h)
+                             for h in glob.glob(os.path.join(root, "src", "*", "*.h"))})
         cflags = (["-std=c99", "-O2", "-funroll-loops", "-fPIC", "-fvisibility=hidden",
-                   "-DAQS_BUILDING_LIBRARY", "-I" + os.path.join(root, "include"),
-                   "-I" + os.path.join(root, "src")]
+                   "-DAQS_BUILDING_LIBRARY", "-I" + os.path.join(root, "include")]
+                  + ["-I" + d for d in layer_dirs]
                   + _env_flags("CPPFLAGS") + _env_flags("CFLAGS"))
         urdf_cflags, urdf_libs = _urdf_support()
         cflags += urdf_cflags
-        sources = sorted(glob.glob(os.path.join(root, "src", "*.c")))
+        sources = sorted(glob.glob(os.path.join(root, "src", "*", "*.c")))
 
         def compile_one(source):
-            obj = os.path.join(objects_dir, os.path.basename(source)[:-2] + ".o")
+            layer = os.path.basename(os.path.dirname(source))
+            obj = os.path.join(objects_dir, layer + "-" + os.path.basename(source)[:-2] + ".o")
             command = cc + cflags + ["-c", source, "-o", obj]
             result = subprocess.run(command, capture_output=True, text=True)
             if result.returncode != 0:
@@ -167,7 +172,7 @@ class sdist_with_sources(sdist):
     def make_release_tree(self, base_dir, files):
         super().make_release_tree(base_dir, files)
         root = source_root()
-        for pattern in ("include/aqs.h", "src/*.c", "src/*.h", "src/aqs.map"):
+        for pattern in ("include/aqs.h", "src/*/*.c", "src/*/*.h", "src/aqs.map"):
             for path in glob.glob(os.path.join(root, pattern)):
                 relative = os.path.relpath(path, root)
                 destination = os.path.join(base_dir, "csrc", relative)

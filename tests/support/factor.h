@@ -1,4 +1,4 @@
-/* factor.h -- reading the packed total-acceleration factors (src/totalacc.c)
+/* factor.h -- reading the packed total-acceleration factors (src/solve/totalacc.c)
  * in the tests. */
 #ifndef AQS_TEST_FACTOR_H
 #define AQS_TEST_FACTOR_H

@@ -34,7 +34,7 @@ int32_t test_add_joint(aqs_linkage *L, int32_t type, int32_t parent, int32_t chi
 double test_rel_diff(const double *a, const double *b, size_t n);
 
 /* ---- Added for the per-concept unit tests. ----
- * Reference geometry written independently of src/spatial.c (other
+ * Reference geometry written independently of src/base/spatial.c (other
  * formulas), so that a test comparing against it can catch a library bug. */
 
 /* Largest absolute difference of two vectors. */

@@ -3,7 +3,7 @@
     L = aqs.load_urdf("robot.urdf")      # a finalized aqs.Linkage
     aqs.save_urdf(L, "copy.urdf")        # or L.save_urdf("copy.urdf")
 
-load_urdf calls the library's loader, aqs_linkage_load_urdf (src/urdf.c,
+load_urdf calls the library's loader, aqs_linkage_load_urdf (src/api/urdf.c,
 expat): one loader for C and Python, documented in docs/urdf.md. In short:
 bodies are the links in document order (a massless root link is the world),
 joints the URDF joints in document order, preceded by joint 0

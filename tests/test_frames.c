@@ -1,4 +1,4 @@
-/* test_update.c -- src/update.c: world poses of bodies found through the
+/* test_frames.c -- src/solve/frames.c: world poses of bodies found through the
  * assembly tree's hierarchical frames (aqs_body_get_pose_world, O(log N)
  * per body) and in one pass (aqs_linkage_get_body_poses_world), against
  * poses chained joint by joint in the test itself, on a 10,000-link chain

@@ -1,4 +1,4 @@
-/* collide.c -- the public collision entry points: shapes, filters and
+/* collide_api.c -- the public collision entry points: shapes, filters and
  * queries (argument checks, status codes, messages). The geometry is in
  * shape.c and narrowphase.c, the tree traversal in broadphase.c. */
 #include <math.h>

@@ -10,10 +10,10 @@
 #include <string.h>
 
 #include "dca.h"
+#include "frames.h"
 #include "heap.h"
 #include "stale.h"
 #include "totalacc.h"
-#include "update.h"
 #include "worldbound.h"
 
 aqs_status adaptive_alloc(aqs_linkage *L)
@@ -132,7 +132,7 @@ static void push(aqs_linkage *L, heap *h, int32_t n)
 {
     solve_state *s = &L->s;
     double a = totalacc_eval(L, n);
-    /* the world measures queue by E_n, the node's bound (src/worldbound.c) */
+    /* the world measures queue by E_n, the node's bound (src/solve/worldbound.c) */
     double key = worldbound_active(L) ? worldbound_key(L, n, a) : a;
     const node *nd = &L->t.nodes[n];
     s->aval[n] = a;
@@ -205,7 +205,7 @@ void adaptive_predict_clear(aqs_linkage *L)
     int32_t i;
     for (i = 0; i < s->npred; i++) {
         int32_t n = s->plist[i];
-        if (s->tstale[n]) update_mark(L, n); /* its T is recomputed by the next update */
+        if (s->tstale[n]) stale_mark(L, n); /* its T is recomputed by the next update */
         s->pred[n] = 0;
     }
     s->npred = 0;
@@ -262,7 +262,7 @@ static void predict_next(aqs_linkage *L, double eps)
     s->npred = 0;
     for (i = 0; i < s->nprocessed; i++) {
         int32_t n = s->processed[i];
-        if (s->pred[n] == 1 && s->tstale[n]) update_mark(L, n); /* leaves the set */
+        if (s->pred[n] == 1 && s->tstale[n]) stale_mark(L, n); /* leaves the set */
         s->pred[n] >>= 1;
         if (s->pred[n]) s->plist[s->npred++] = n;
     }
@@ -400,7 +400,7 @@ void adaptive_integrate(aqs_linkage *L, double h)
             const joint_def *jd = &L->joints[L->m.eff_joint[i]];
             joint_integrate(jd, L->q + jd->qoff, L->qdd + jd->voff, h);
         }
-        update_all_poses(L);
+        frames_all(L);
         stale_positions(L, -1);
     } else {
         for (i = 0; i < s->nprocessed; i++) {
@@ -410,7 +410,7 @@ void adaptive_integrate(aqs_linkage *L, double h)
         /* Processed nodes were taken parents first: refresh children first. */
         for (i = s->nprocessed - 1; i >= 0; i--) {
             n = s->processed[i];
-            update_node_poses(L, n);
+            frames_node(L, n);
             stale_positions(L, n);
         }
         if (s->nprocessed == 0) stale_loads(L); /* a step never leaves a solve to refine */

@@ -39,7 +39,7 @@ typedef struct {
     int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
                              about it (13 doubles, node frame; zero when grounded) */
     int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
-                             + Lambda Lambda^T (src/dca.c, docs/math.md "Accurate Phi") */
+                             + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi") */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
     int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
@@ -71,7 +71,7 @@ typedef struct {
     double *tdata;
     double *tscratch; /* the stacked matrix of one node */
     int32_t *tperm;   /* per node (at its handles offset): T's column blocks as handle
-                         indices, in the order the ancestors join them (src/totalacc.c) */
+                         indices, in the order the ancestors join them (src/solve/totalacc.c) */
     int32_t *trowpos; /* per node (at its tpos, 6nh + 1 entries): the first column of each row of T */
     int32_t *tiscratch; /* 9 max_handles + 4 */
     /* Lazy update: nodes whose coefficients are stale (top-closed set). */
@@ -149,7 +149,7 @@ typedef struct {
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
 } solve_state;
 
-/* The exact solve by the articulated-body algorithm (src/aba.c): scratch
+/* The exact solve by the articulated-body algorithm (src/solve/aba.c): scratch
  * sized at finalize, rewritten by every such solve. */
 typedef struct {
     int32_t *order; /* ne effective joints, each after its parent composite's joint */
@@ -202,18 +202,27 @@ struct aqs_linkage {
     int fb_last;          /* the last solve was such an exact solve */
     aba_state aba;
     pose *body_world;   /* nbodies: scratch for the all-bodies pose pass */
-    struct collision *col; /* shapes and their queries (src/collide.h); NULL without shapes */
-    struct worldbound *wb; /* the world-space measures' per-node data (src/worldbound.h); NULL until one is set */
+    struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
+    struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;
-    char *load_warnings;  /* what the last URDF load did not model (src/urdf.c); NULL = none */
+    char *load_warnings;  /* what the last URDF load did not model (src/api/urdf.c); NULL = none */
 };
 
-/* The name of a body / joint, or NULL (src/names.c). */
-const char *lk_body_name(const aqs_linkage *L, int32_t body);
-const char *lk_joint_name(const aqs_linkage *L, int32_t joint);
-/* Release the names and the load warnings (aqs_linkage_destroy). */
+/* The name of a body / joint, or NULL (set by src/api/names.c; model.c's messages read
+ * them, so they are here, below the public face). */
+static inline const char *lk_body_name(const aqs_linkage *L, int32_t body)
+{
+    if (!L->body_name || body < 0 || body >= L->body_name_cap) return NULL;
+    return L->body_name[body];
+}
+static inline const char *lk_joint_name(const aqs_linkage *L, int32_t joint)
+{
+    if (!L->joint_name || joint < 0 || joint >= L->joint_name_cap) return NULL;
+    return L->joint_name[joint];
+}
+/* Release the names and the load warnings (aqs_linkage_destroy; src/api/names.c). */
 void lk_names_free(aqs_linkage *L);
 
 /* Memory through the linkage's allocator. */

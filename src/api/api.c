@@ -12,6 +12,7 @@
 #include "check.h"
 #include "collide.h"
 #include "dca.h"
+#include "frames.h"
 #include "linkage.h"
 #include "model.h"
 #include "stale.h"
@@ -429,8 +430,8 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
     for (n = 0; n < L->t.nnodes; n++)
-        if (L->t.nodes[n].joint < 0) update_leaf_poses(L, n);
-    update_all_poses(L);
+        if (L->t.nodes[n].joint < 0) frames_leaf(L, n);
+    frames_all(L);
     stale_tree(L);
     /* The DCA coefficients only when the DCA is the exact solver, or when
      * nothing can move (no tree node: the solve takes the DCA path, and its
@@ -736,7 +737,7 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         char msg[sizeof L->error];
         memcpy(msg, L->error, sizeof msg);
         copy_moved_positions(L, L->q, L->q_saved);
-        update_all_poses(L);
+        frames_all(L);
         stale_positions(L, -1);
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
@@ -951,11 +952,11 @@ static void positions_changed(aqs_linkage *L, int32_t joint)
 {
     if (!L->finalized) return;
     if (joint < 0) {
-        update_all_poses(L);
+        frames_all(L);
         stale_positions(L, -1);
     } else if (L->m.eff_of_joint[joint] >= 0) {
         int32_t e = L->m.eff_of_joint[joint];
-        update_poses_from_joint(L, e);
+        frames_from_joint(L, e);
         stale_positions(L, L->t.node_of_eff[e]);
     } else {
         stale_loads(L); /* a fixed joint moves nothing; as for any position change */
@@ -1096,7 +1097,7 @@ AQS_API aqs_status aqs_body_get_pose_world(const aqs_linkage *cL, int32_t body, 
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, pos);
     CHECK_PTR(L, fn, quat);
-    update_body_pose_world(L, body, &P);
+    frames_body_world(L, body, &P);
     write_pose(&P, pos, quat);
     return AQS_OK;
 }
@@ -1112,7 +1113,7 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *cL, doubl
     CHECK_PTR(L, fn, poses);
     if (n < 7 * (size_t)L->nbodies)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 7 * bodies = %d", fn, n, 7 * (int)L->nbodies);
-    update_all_body_poses_world(L, L->body_world);
+    frames_all_bodies_world(L, L->body_world);
     for (b = 0; b < L->nbodies; b++) write_pose(&L->body_world[b], poses + 7 * b, poses + 7 * b + 3);
     return AQS_OK;
 }

@@ -73,7 +73,7 @@ static inline void dense_tmatvec6(const double *A, const double *x, double *y)
  * upper part zeroed). Returns 0, or -1 at a non-positive or non-finite pivot. */
 int dense_cholesky6(const double *A, double *C);
 /* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6); used by the
- * inverse-inertia DCA form (src/dca_phi.c). */
+ * inverse-inertia DCA form (src/solve/dca_phi.c). */
 void dense_cholesky6_inverse(const double *C, double *V);
 /* Solve C w = b (forward) for n right-hand sides stored as the columns of the
  * 6 x n row-major b; w has the same layout. */

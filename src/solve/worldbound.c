@@ -182,7 +182,7 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     return AQS_OK;
 }
 
-/* Pose of B's frame in C's frame (as src/update.c). */
+/* Pose of B's frame in C's frame (as src/solve/frames.c). */
 static void child_frame(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;

@@ -1,8 +1,8 @@
 /* dca.h -- articulated-body coefficients of the assembly tree's nodes and the
  * exact back-substitution (MATH.md §3; docs/math.md, "Accurate Phi"). Two
  * forms of the node update share the outputs below: the square-root form
- * (src/dca.c, AQS_DCA_FORM_SQRT, the default) and the inverse-inertia form
- * (src/dca_phi.c, AQS_DCA_FORM_PHI). */
+ * (src/solve/dca.c, AQS_DCA_FORM_SQRT, the default) and the inverse-inertia form
+ * (src/solve/dca_phi.c, AQS_DCA_FORM_PHI). */
 #ifndef AQS_DCA_H
 #define AQS_DCA_H
 
@@ -22,7 +22,7 @@ void dca_leaf_b(aqs_linkage *L, int32_t n);
  * position and force, in the linkage's DCA form. Returns 0, or -1 when
  * the articulated inertia is numerically singular. */
 int dca_node_update(aqs_linkage *L, int32_t n);
-/* The inverse-inertia form of dca_node_update (src/dca_phi.c). */
+/* The inverse-inertia form of dca_node_update (src/solve/dca_phi.c). */
 int dca_phi_node_update(aqs_linkage *L, int32_t n);
 /* out (6 nh) = M W g for a 6-vector g (the handle part of g^T [W M^T]):
  * FX^T g. */

@@ -94,7 +94,7 @@ static void merge(const double *s1, const double *s2, double *out)
 /* ------------------------------------------------------------ frames */
 
 /* Pose of B's frame (the child frame of the principal joint) in C's frame,
- * and B's world pose from C's. Same operations as src/update.c. */
+ * and B's world pose from C's. Same operations as src/solve/frames.c. */
 static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;

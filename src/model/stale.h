@@ -6,7 +6,7 @@
  *   - whether the last solve can still be refined (L->s.valid),
  *   - the composites' loads and the world leaf's gravity term
  *     (L->loads_dirty, L->gravity_dirty), recomputed by update_loads,
- *   - the assembly tree's coefficients (the marks of update_mark and
+ *   - the assembly tree's coefficients (the marks of stale_mark and
  *     L->t.all_dirty), recomputed by update_coefficients.
  * The recomputations report back (stale_loads_fresh, stale_tree_fresh) so
  * that no other file writes those flags. */
@@ -40,10 +40,15 @@ void stale_solve_done(aqs_linkage *L);
  * (refinable = 1), or it started and has not finished (0). */
 void stale_set_refinable(aqs_linkage *L, int refinable);
 
+/* Mark node n and its ancestors stale (MATH.md §9.1): the dirty set that
+ * update_coefficients recomputes. O(log N), less when an ancestor is already
+ * marked (the set is top-closed). */
+void stale_mark(aqs_linkage *L, int32_t n);
+
 /* A full update recomputes every load and the gravity term as well. */
 void stale_loads_all(aqs_linkage *L);
 
-/* Reports of the recomputations (src/update.c). */
+/* Reports of the recomputations (src/solve/update.c). */
 void stale_gravity_fresh(aqs_linkage *L); /* update_loads: the world leaf's gravity term */
 void stale_loads_fresh(aqs_linkage *L);   /* update_loads: the composites' loads */
 void stale_tree_fresh(aqs_linkage *L);    /* update_coefficients: every marked node done */

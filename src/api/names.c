@@ -9,18 +9,6 @@
 
 #define NAME_MAX_BYTES 4096
 
-const char *lk_body_name(const aqs_linkage *L, int32_t body)
-{
-    if (!L->body_name || body < 0 || body >= L->body_name_cap) return NULL;
-    return L->body_name[body];
-}
-
-const char *lk_joint_name(const aqs_linkage *L, int32_t joint)
-{
-    if (!L->joint_name || joint < 0 || joint >= L->joint_name_cap) return NULL;
-    return L->joint_name[joint];
-}
-
 void lk_names_free(aqs_linkage *L)
 {
     int32_t i;

@@ -65,7 +65,7 @@ void aba_free(aqs_linkage *L)
 
 /* The pose of effective joint e's child composite in its parent's frame:
  * the joint's placement composed with J(q_e) (kept current in the tree by
- * update_node_poses whenever q_e changes). */
+ * frames_node whenever q_e changes). */
 static void child_in_parent(const aqs_linkage *L, int32_t e, pose *P)
 {
     const tree *t = &L->t;

@@ -1,6 +1,6 @@
 /* collide.h -- the collision state of a linkage (allocated by the first
  * shape or filter call; NULL otherwise) and the broad phase on the assembly
- * tree (src/broadphase.c). */
+ * tree (src/collide/broadphase.c). */
 #ifndef AQS_COLLIDE_H
 #define AQS_COLLIDE_H
 
@@ -69,7 +69,7 @@ void collide_free(aqs_linkage *L);
 void broadphase_reset(aqs_linkage *L);
 /* Forget which subassemblies were free of contact (filters changed). */
 void broadphase_forget(aqs_linkage *L);
-/* The cross poses of internal node n changed (src/update.c): mark it and its
+/* The cross poses of internal node n changed (src/solve/frames.c): mark it and its
  * ancestors for refitting. O(1) amortized. */
 void broadphase_node_moved(aqs_linkage *L, int32_t n);
 /* Build the per-node data if needed. AQS_OK or AQS_ENOMEM (message set, nothing changed). */
@@ -82,7 +82,7 @@ aqs_status broadphase_rebuild(aqs_linkage *L, int32_t nshapes, const char *fn);
 /* Run a query (after broadphase_build): mode AQS_COLLIDE_*; contacts up to
  * capacity into out; any != 0 stops at the first contact. Returns the total. */
 size_t broadphase_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t capacity, int any);
-/* Penalty contact (src/update.c, inside update_loads): a lazy query whose
+/* Penalty contact (src/solve/update.c, inside update_loads): a lazy query whose
  * contacts add k depth n at their points to the rigid groups' comp_force,
  * registering the groups as loaded. Needs the built data. */
 void broadphase_penalty(aqs_linkage *L);

@@ -6,7 +6,7 @@
  * but the subtraction loses digits as subassemblies grow (a straight chain
  * of 13,000 links is "numerically singular"), and with near point masses,
  * light parts and large mass ratios (docs/math.md, "Accurate Phi"). It
- * writes the same outputs as the square-root form (src/dca.c): rho, gamma,
+ * writes the same outputs as the square-root form (src/solve/dca.c): rho, gamma,
  * b, FX = W M^T and QX = U M^T. */
 #include "dca.h"
 
@@ -129,7 +129,7 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
     int32_t nAo = nA - 1, i, j, ci, cj;
     double T[36], Ws[36], D[36], Dinv[36], beta[6], bk[6], tmp[6], Vb[6];
 
-    /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
+    /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
 
@@ -261,7 +261,7 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
         }
     }
     /* FX = W M^T and QX = U M^T for the back-substitution and the total
-     * accelerations (src/dca.c), W = V - V S U (zero for a free joint). */
+     * accelerations (src/solve/dca.c), W = V - V S U (zero for a free joint). */
     {
         double V[36], Wm[36];
         const int32_t rows = 6 * nh;

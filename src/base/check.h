@@ -1,5 +1,5 @@
 /* check.h -- error messages and the argument checks shared by the entry
- * points (api.c, collide.c): each check returns AQS_OK or records a message
+ * points (api.c, collide_api.c): each check returns AQS_OK or records a message
  * naming the function, the argument and the value, and returns the status. */
 #ifndef AQS_CHECK_H
 #define AQS_CHECK_H

@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "dense.h"
+#include "frames.h"
 #include "model.h"
 #include "stale.h"
-#include "update.h"
 
 static int mp_inverse_factor(const double *mp, double *Y);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
@@ -581,7 +581,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     int32_t i;
 
     if (L->dca_form == AQS_DCA_FORM_PHI) return dca_phi_node_update(L, n);
-    /* J = J(q_k), refreshed by update_node_poses; X = spatial_from_parent(J)
+    /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
     joint_subspace(jd, q, S);
     spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
@@ -715,10 +715,10 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         if (L->load_slot[b] >= 0) {
             double fb[6];
             if (!have_pose) {
-                update_comp_pose_world(L, c, &Pc);
+                frames_comp_world(L, c, &Pc);
                 have_pose = 1;
             }
-            update_body_load_in_comp(L, b, &Pc, fb);
+            frames_load_in_comp(L, b, &Pc, fb);
             for (i = 0; i < 6; i++) acc[6 * b + i] -= fb[i];
         }
         if (jd->type != AQS_JOINT_FIXED) continue;

@@ -1,4 +1,4 @@
-/* check.c -- error messages and shared argument checks (src/check.h). */
+/* check.c -- error messages and shared argument checks (src/base/check.h). */
 #include "check.h"
 
 #include <math.h>

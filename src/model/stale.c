@@ -1,12 +1,23 @@
-/* stale.c -- the one owner of "what is stale" (src/stale.h). */
+/* stale.c -- the one owner of "what is stale" (src/model/stale.h). */
 #include "stale.h"
 
-#include "update.h"
+#include "invariant.h"
+
+void stale_mark(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    /* The dirty set is top-closed: stop at the first node already in it. */
+    for (; n >= 0 && t->stamp[n] != t->epoch; n = t->nodes[n].parent) {
+        t->stamp[n] = t->epoch;
+        t->dirty[t->ndirty++] = n;
+    }
+    AQS_ASSERT(t->ndirty <= t->nnodes); /* each node once per epoch */
+}
 
 void stale_positions(aqs_linkage *L, int32_t n)
 {
     if (n < 0) L->t.all_dirty = 1;
-    else update_mark(L, n);
+    else stale_mark(L, n);
     L->loads_dirty = 1; /* world-frame loads are re-expressed (MATH.md §9.1) */
     L->s.valid = 0;
 }
@@ -25,7 +36,7 @@ void stale_gravity(aqs_linkage *L)
 
 void stale_joint_force(aqs_linkage *L, int32_t n)
 {
-    if (n >= 0) update_mark(L, n);
+    if (n >= 0) stale_mark(L, n);
     L->s.valid = 0;
 }
 

@@ -1,5 +1,5 @@
 /* certificate.h -- what the lazy self-collision query may keep from one query
- * to the next (src/broadphase.c): per-node lists of shape pairs in two
+ * to the next (src/collide/broadphase.c): per-node lists of shape pairs in two
  * compacting pools (the cached contacts; the certificates' near lists), and
  * the motion bounds that say how long a certificate of separation stays
  * valid (docs/collision.md, "Certificates"). */
