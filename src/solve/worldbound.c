@@ -270,6 +270,7 @@ void worldbound_processed(aqs_linkage *L, int32_t n)
     child_frame(L, C, &Pk);
     w->wpose[C->a] = w->wpose[n];
     pose_compose(&w->wpose[n], &Pk, &w->wpose[C->b]);
+    if (L->s.metric != AQS_METRIC_REL_WORLD) return; /* only the relative form needs L_w */
     if (L->t.nodes[C->a].joint < 0) leaf_lower(L, C->a);
     if (L->t.nodes[C->b].joint < 0) leaf_lower(L, C->b);
 }
