@@ -163,8 +163,12 @@ $(INTLIB): $(OBJS)
 $(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(INTLIB) | $(BUILD_PREREQ)
 	@mkdir -p $(dir $@)
 	@echo "  CC      $<"
-	@$(CC) $(CFLAGS_TEST) -Itests/support $(CPPFLAGS) $(CFLAGS) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT) \
-	    $(INTLIB) -lcmocka $(LDLIBS)
+	@$(CC) $(CFLAGS_TEST) -Itests/support $(TEST_EXTRA) $(CPPFLAGS) $(CFLAGS) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT) \
+	    $(TEST_EXTRA_SRC) $(INTLIB) -lcmocka $(LDLIBS)
+# The world-space bound is checked on the benchmark scenes too (bench/scenes.c).
+$(BUILD)/tests/test_worldbound: bench/scenes.c bench/scenes.h
+$(BUILD)/tests/test_worldbound: TEST_EXTRA := -Ibench
+$(BUILD)/tests/test_worldbound: TEST_EXTRA_SRC := bench/scenes.c
 
 $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
 	@mkdir -p $(dir $@)

@@ -19,7 +19,12 @@
  *    median step time. speedup is against the articulated-body step, R (per
  *    tree node) against the DCA step.
  * displacement_error = max_i |d_i - d_i^exact| / max_i |d_i^exact| over the
- * bodies' centres of mass after K steps (DESIGN.md); 0 for eps = 0.
+ * bodies' centres of mass after K steps (DESIGN.md); 0 for eps = 0. The
+ * paper's "average relative displacement error per time step" is read two
+ * ways as well (docs/bench.md): displacement_error_per_step = that / K, and
+ * displacement_error_mean = the mean over the steps k of the same relative
+ * error after k steps (over displacement_checkpoints evenly spaced steps,
+ * every step unless the reference positions would take more than 256 MB).
  *
  * Loads (seeded by --seed): gravity off; N_f distinct bodies, the first N_f
  * of one seeded sequence (so the sets are nested), each pulled at its centre
@@ -53,7 +58,9 @@ typedef struct bench_options {
     int32_t size;
     int32_t forces[BENCH_MAX_LIST];
     int nforces;
-    int32_t metric;
+    int32_t metric;  /* the one in force (the current item of metrics) */
+    int32_t metrics[BENCH_MAX_LIST];
+    int nmetrics;
     double eps[BENCH_MAX_LIST];
     int eps_log2[BENCH_MAX_LIST]; /* -1: not a power of two */
     int neps;
@@ -76,6 +83,9 @@ typedef struct bench_state {
     double mean_handles, build_s, finalize_s;
     long exact_bytes, adaptive_bytes;
     double *q0, *com_local, *com0, *com_now, *poses, *disp_ref, *qdd;
+    double *ck_ref;  /* the exact run's centres of mass at the checkpoint steps */
+    int32_t *ck_step; /* checkpoint i is after step ck_step[i] (increasing, the last is K) */
+    int32_t nck;
     double *times, *times_exact, *times_dca;
     int32_t *force_body;
     double (*force_dir)[3];
@@ -94,10 +104,12 @@ typedef struct bench_run {
     double mean_cost_ad, mean_cost_ex; /* the automatic path's predicted costs, per step */
     int32_t max_ne, fallback_steps, auto_exact_steps;
     double disp_err, max_disp;
+    double disp_mean; /* mean over the checkpoints of the relative error after that step */
 } bench_run;
 
 static const char *const metric_names[] = {"abs_linkage", "rel_linkage", "abs_joint",
-                                           "rel_joint"};
+                                           "rel_joint",   "abs_world",   "rel_world"};
+#define BENCH_NMETRICS ((int)(sizeof metric_names / sizeof metric_names[0]))
 
 static int failed(aqs_status status, const aqs_linkage *linkage, const char *what)
 {
@@ -120,7 +132,9 @@ static void usage(FILE *f)
             "  --scene NAME       chain30 | chain | molecule | millipede (default molecule)\n"
             "  --joints N         size of chain and molecule (default 50000)\n"
             "  --forces LIST      N_f values, e.g. 1,10,100,1000 (default 1)\n"
-            "  --metric NAME      rel_joint | abs_joint | rel_linkage | abs_linkage\n"
+            "  --metric LIST      rel_joint | abs_joint | rel_linkage | abs_linkage |\n"
+            "                     rel_world | abs_world, or several separated by commas\n"
+            "                     (each eps is run for each, against one exact reference)\n"
             "                     (default rel_joint)\n"
             "  --eps LIST         eps values: numbers, 2^-I, or ranges 2^-I..J\n"
             "                     (default 2^-19); 0 is exact on the adaptive linkage\n"
@@ -318,6 +332,8 @@ static int parse_options(int argc, char **argv, bench_options *o)
     o->forces[0] = 1;
     o->nforces = 1;
     o->metric = AQS_METRIC_REL_JOINT;
+    o->metrics[0] = AQS_METRIC_REL_JOINT;
+    o->nmetrics = 1;
     o->eps[0] = ldexp(1.0, -19);
     o->eps_log2[0] = 19;
     o->neps = 1;
@@ -370,15 +386,29 @@ static int parse_options(int argc, char **argv, bench_options *o)
                 return 1;
             }
             break;
-        case OPT_METRIC:
-            for (k = 0; k < 4 && strcmp(val, metric_names[k]) != 0; ++k) {
+        case OPT_METRIC: {
+            /* a comma-separated list: each eps is run for each measure,
+             * against one exact reference run */
+            const char *p = val;
+            o->nmetrics = 0;
+            for (;;) {
+                size_t len = strcspn(p, ",");
+                for (k = 0; k < BENCH_NMETRICS && (strlen(metric_names[k]) != len ||
+                                                   strncmp(p, metric_names[k], len) != 0); ++k) {
+                }
+                if (k == BENCH_NMETRICS || o->nmetrics == BENCH_MAX_LIST) {
+                    fprintf(stderr, "aqs-bench: --metric: unknown measure in '%s'\n", val);
+                    return 1;
+                }
+                o->metrics[o->nmetrics++] = (int32_t)k;
+                if (p[len] == '\0') {
+                    break;
+                }
+                p += len + 1;
             }
-            if (k == 4) {
-                fprintf(stderr, "aqs-bench: --metric: unknown measure '%s'\n", val);
-                return 1;
-            }
-            o->metric = (int32_t)k;
+            o->metric = o->metrics[0];
             break;
+        }
         case OPT_STEPS:
         case OPT_REPEATS:
         case OPT_EXACT_EVERY:
@@ -644,6 +674,32 @@ static int displacement(bench_state *b, aqs_linkage *L, int ref, bench_run *r)
     return 0;
 }
 
+/* The relative displacement error of the adaptive linkage after checkpoint
+ * ck's step: max_i |c_i - c_i^exact| / max_i |c_i^exact - c_i^0| (-1 when
+ * the exact run has not moved). */
+static int checkpoint_error(bench_state *b, int32_t ck, double *e)
+{
+    const double *ref = b->ck_ref + 3 * (size_t)b->bodies * (size_t)ck;
+    double max_ref = 0.0, max_err = 0.0;
+    int32_t i;
+    if (com_world(b, b->adapt, b->com_now) != 0) {
+        return 1;
+    }
+    for (i = 0; i < b->bodies; ++i) {
+        double r2 = 0.0, e2 = 0.0;
+        int k;
+        for (k = 0; k < 3; ++k) {
+            const size_t j = 3 * (size_t)i + (size_t)k;
+            r2 += (ref[j] - b->com0[j]) * (ref[j] - b->com0[j]);
+            e2 += (b->com_now[j] - ref[j]) * (b->com_now[j] - ref[j]);
+        }
+        max_ref = r2 > max_ref ? r2 : max_ref;
+        max_err = e2 > max_err ? e2 : max_err;
+    }
+    *e = max_ref > 0.0 ? sqrt(max_err) / sqrt(max_ref) : -1.0;
+    return 0;
+}
+
 static int record_tip(bench_state *b, aqs_linkage *L, const char *run, int32_t nf, double eps,
                       int32_t step)
 {
@@ -715,14 +771,18 @@ static void finish_sums(bench_run *r, int32_t n)
  * reference (record = 1) and its median step time is returned in r. */
 static int exact_reference(bench_state *b, int32_t nf, double dt, int record, bench_run *r)
 {
-    int32_t s;
+    int32_t s, ck;
     memset(r, 0, sizeof *r);
     if (reset(b, b->exact, nf) != 0 || (record && record_tip(b, b->exact, "exact", nf, 0.0, 0))) {
         return 1;
     }
-    for (s = 0; s < b->opt->steps; ++s) {
+    for (s = 0, ck = 0; s < b->opt->steps; ++s) {
         if (timed_step(b, b->exact, dt, &b->times[s], r) != 0 ||
             (record && record_tip(b, b->exact, "exact", nf, 0.0, s + 1) != 0)) {
+            return 1;
+        }
+        if (record && ck < b->nck && b->ck_step[ck] == s + 1 &&
+            com_world(b, b->exact, b->ck_ref + 3 * (size_t)b->bodies * (size_t)ck++) != 0) {
             return 1;
         }
     }
@@ -738,7 +798,7 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
                         bench_run *r)
 {
     const int32_t K = b->opt->steps;
-    int32_t chunk = b->opt->exact_every, s, ne = 0;
+    int32_t chunk = b->opt->exact_every, s, ne = 0, ck = 0, nmean = 0;
     memset(r, 0, sizeof *r);
     if (K >= 3 && chunk > K / 3) {
         chunk = K / 3;
@@ -762,6 +822,16 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
             (record && record_tip(b, b->adapt, "adaptive", nf, eps, s + 1) != 0)) {
             return 1;
         }
+        if (record && ck < b->nck && b->ck_step[ck] == s + 1) {
+            double e;
+            if (checkpoint_error(b, ck++, &e) != 0) {
+                return 1;
+            }
+            if (e >= 0.0) {
+                r->disp_mean += e;
+                ++nmean;
+            }
+        }
         if ((s + 1) % chunk == 0 || s + 1 == K) {
             /* One exact step by each solver: the articulated-body algorithm
              * (the default, what an exact user pays) and the DCA (whose time
@@ -781,6 +851,7 @@ static int adaptive_run(bench_state *b, int32_t nf, double eps, double dt, int r
         }
     }
     finish_sums(r, K);
+    r->disp_mean = nmean > 0 ? r->disp_mean / nmean : 0.0;
     r->median_s = bench_median(b->times, (size_t)K);
     r->exact_median_s = bench_median(b->times_exact, (size_t)ne);
     r->dca_median_s = bench_median(b->times_dca, (size_t)ne);
@@ -837,6 +908,8 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"computed_joints\":%.4f,\"max_computed_joints\":%d,\"nodes_updated\":%.4f,"
             "\"nodes_processed\":%.4f,\"max_error_bound\":%.9g,\"ratio_R\":%.9g,"
             "\"displacement_error\":%.9g,\"max_displacement\":%.9g,"
+            "\"displacement_error_per_step\":%.9g,\"displacement_error_mean\":%.9g,"
+            "\"displacement_checkpoints\":%d,"
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
             "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
@@ -844,7 +917,8 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"auto_cost_adaptive\":%.6g,\"auto_cost_exact\":%.6g}\n",
             dt, o->first_move, (int)o->steps, (int)o->repeats, ms, 1e3 * r->mean_s, exact_ms,
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
-            r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp, b->exact_bytes,
+            r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp,
+            r->disp_err / o->steps, r->disp_mean, (int)b->nck, b->exact_bytes,
             b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
             o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba,
             o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt", o->autopath ? "true" : "false",
@@ -870,9 +944,9 @@ static void print_row(bench_state *b, int32_t nf, int ei, const bench_run *r, do
     if (b->progress) {
         fputs("\r\033[K", stderr);
     }
-    printf("%6d %7s %6d %10.4f %10.3f %9.1f %10.3f %9.1f %10.1f %10.1f %6.2f %10.2e %10.2e\n", (int)nf,
-           eps, (int)r->steps, ms, exact_ms, exact_ms / ms, dca_ms, dca_ms / ms, r->mean_ne, r->mean_nu,
-           ms / denom, r->disp_err, r->max_bound);
+    printf("%6d %7s %6d %10.4f %10.3f %9.1f %10.3f %9.1f %10.1f %10.1f %6.2f %10.2e %10.2e %10.2e %10.2e\n",
+           (int)nf, eps, (int)r->steps, ms, exact_ms, exact_ms / ms, dca_ms, dca_ms / ms, r->mean_ne,
+           r->mean_nu, ms / denom, r->disp_err, r->disp_err / r->steps, r->disp_mean, r->max_bound);
     fflush(stdout);
 }
 
@@ -915,6 +989,24 @@ static int setup(bench_state *b)
     b->com0 = (double *)malloc(sizeof(double) * 3 * (size_t)b->bodies);
     b->com_now = (double *)malloc(sizeof(double) * 3 * (size_t)b->bodies);
     b->disp_ref = (double *)calloc(3 * (size_t)b->bodies, sizeof(double));
+    {
+        /* checkpoints of the per-step error: every step within 256 MB */
+        const double per = 24.0 * (double)b->bodies, budget = 256.0 * 1024 * 1024;
+        int32_t k;
+        b->nck = per * o->steps <= budget ? o->steps : (int32_t)(budget / per);
+        if (b->nck < 1) {
+            b->nck = 1;
+        }
+        b->ck_step = (int32_t *)malloc(sizeof(int32_t) * (size_t)b->nck);
+        b->ck_ref = (double *)malloc(3 * sizeof(double) * (size_t)b->bodies * (size_t)b->nck);
+        if (b->ck_step == NULL || b->ck_ref == NULL) {
+            fprintf(stderr, "aqs-bench: out of memory\n");
+            return 1;
+        }
+        for (k = 0; k < b->nck; ++k) {
+            b->ck_step[k] = (int32_t)(((int64_t)(k + 1) * o->steps) / b->nck);
+        }
+    }
     b->times = (double *)malloc(sizeof(double) * (size_t)o->steps);
     b->times_exact = (double *)malloc(sizeof(double) * (size_t)o->steps);
     b->times_dca = (double *)malloc(sizeof(double) * (size_t)o->steps);
@@ -1002,10 +1094,14 @@ static int run_forces(bench_state *b, int32_t nf)
         }
         ref[rep] = 1e3 * ref_run.median_s;
     }
-    for (ei = 0; ei < o->neps; ++ei) {
+    for (ei = 0; ei < o->neps * o->nmetrics; ++ei) {
         double ms_med, ex_med, dc_med, ref_med;
+        ((bench_options *)o)->metric = o->metrics[ei / o->neps];
+        if (o->nmetrics > 1 && ei % o->neps == 0 && !o->quiet) {
+            printf("-- metric %s\n", metric_names[o->metric]);
+        }
         for (rep = 0; rep < R; ++rep) {
-            if (adaptive_run(b, nf, o->eps[ei], dt, rep == 0, rep == 0 ? &first : &r) != 0) {
+            if (adaptive_run(b, nf, o->eps[ei % o->neps], dt, rep == 0, rep == 0 ? &first : &r) != 0) {
                 goto out;
             }
             ms[rep] = 1e3 * (rep == 0 ? first.median_s : r.median_s);
@@ -1017,8 +1113,8 @@ static int run_forces(bench_state *b, int32_t nf)
         dc_med = bench_median(dc, (size_t)R);
         memcpy(ms, ref, sizeof(double) * (size_t)R);
         ref_med = bench_median(ms, (size_t)R);
-        write_json(b, nf, ei, dt, &first, ms_med, ex_med, dc_med, ref_med);
-        print_row(b, nf, ei, &first, ms_med, ex_med, dc_med);
+        write_json(b, nf, ei % o->neps, dt, &first, ms_med, ex_med, dc_med, ref_med);
+        print_row(b, nf, ei % o->neps, &first, ms_med, ex_med, dc_med);
     }
     rc = 0;
 out:
@@ -1089,20 +1185,22 @@ int main(int argc, char **argv)
     {
         const long K = opt.steps;
         const long chunks = (K + 2) / 3 > K / opt.exact_every ? (K + 2) / 3 : K / opt.exact_every;
-        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * (K + 2 * chunks + 1));
+        b.work_total = (long)opt.nforces * opt.repeats * (K + (long)opt.neps * opt.nmetrics * (K + 2 * chunks + 1));
     }
     if (!opt.quiet) {
-        printf("metric %s; %d steps per run, %d repeat(s); force seed %llu; dt: the fastest "
+        printf("metric %s%s; %d steps per run, %d repeat(s); force seed %llu; dt: the fastest "
                "joint moves %.3g in the first exact step\n"
                "ms/step, exact ms (articulated-body algorithm, the default exact solver) and DCA ms "
                "(exact by the DCA): medians (exact steps interleaved with the adaptive run); "
                "R = t / ((N_E + N_f log2 N) t_node), t_node = DCA ms / tree nodes; disp err = "
-               "max_i |d_i - d_i^exact| / max_i |d_i^exact| (centres of mass)\n",
-               metric_names[opt.metric], (int)opt.steps, (int)opt.repeats,
+               "max_i |d_i - d_i^exact| / max_i |d_i^exact| (centres of mass) after the run; err/steps = "
+               "that / steps; mean err = its mean over the steps (the paper's 'per time step', two "
+               "readings)\n",
+               metric_names[opt.metric], opt.nmetrics > 1 ? " (and the others of --metric)" : "", (int)opt.steps, (int)opt.repeats,
                (unsigned long long)opt.seed, opt.first_move);
-        printf("%6s %7s %6s %10s %10s %9s %10s %9s %10s %10s %6s %10s %10s\n", "N_f", "eps", "steps",
-               "ms/step", "exact ms", "speedup", "DCA ms", "vs DCA", "N_E", "updated", "R",
-               "disp err", "max bound");
+        printf("%6s %7s %6s %10s %10s %9s %10s %9s %10s %10s %6s %10s %10s %10s %10s\n", "N_f", "eps",
+               "steps", "ms/step", "exact ms", "speedup", "DCA ms", "vs DCA", "N_E", "updated", "R",
+               "disp err", "err/steps", "mean err", "max bound");
     }
     for (i = 0; i < opt.nforces; ++i) {
         if (run_forces(&b, opt.forces[i]) != 0) {
@@ -1132,6 +1230,8 @@ done:
     free(b.com0);
     free(b.com_now);
     free(b.disp_ref);
+    free(b.ck_ref);
+    free(b.ck_step);
     free(b.times);
     free(b.times_exact);
     free(b.times_dca);

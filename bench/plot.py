@@ -10,6 +10,9 @@ DIR/<set>-chain30-tip.csv and DIR/scaling.jsonl (whichever exist) and writes PNG
   <set>-fig8-displacement.png   relative displacement error against eps (paper Fig. 8)
   <set>-fig1-chain30.png        chain30 tip trajectories for several eps against exact (Fig. 1)
   scaling.png                   molecule 10k..1M joints, log-log
+  world-measures.png            speedup and N_E against the final relative displacement error,
+                                joint and world measures side by side (DIR/world-*.jsonl,
+                                aqs-bench --metric rel_joint,rel_world; issue 16)
 Within a file only the lines of its latest run_id are used (scaling.jsonl: the latest line
 of each size). --tables prints the results as Markdown tables instead.
 """
@@ -112,6 +115,33 @@ def displacement(sets, out):
     ax.set_ylabel("max_i |d_i - d_i^exact| / max_i |d_i^exact|")
     ax.set_title("relative displacement error of the centres of mass")
     return finish(fig, (ax,), out)
+
+
+def world_measures(d, out):
+    """Speedup over the exact step and N_E against the final displacement error, one panel
+    pair per scene and N_f, a curve per measure (the paper's Figure 8 axis)."""
+    panels = []
+    for scene in ("molecule", "chain30", "millipede"):
+        rows = load_jsonl(os.path.join(d, f"world-{scene}.jsonl"))
+        for nf, g in by_forces(rows).items():
+            panels.append((f"{scene}, N_f = {nf}, {g[0]['steps']} steps", g))
+    if not panels:
+        return False
+    fig, axes = plt.subplots(2, len(panels), figsize=(3.6 * len(panels), 6.2), squeeze=False)
+    for k, (title, g) in enumerate(panels):
+        for metric, style in (("rel_joint", "o-"), ("rel_world", "s-")):
+            pts = sorted((r["displacement_error"], r["speedup"], r["computed_joints"])
+                         for r in g if r["metric"] == metric and r["displacement_error"] > 0)
+            if not pts:
+                continue
+            e, sp, ne = zip(*pts)
+            axes[0][k].loglog(e, sp, style, ms=3, label=metric)
+            axes[1][k].semilogx(e, ne, style, ms=3, label=metric)
+        axes[0][k].set_title(title, fontsize=9)
+        axes[0][k].set_ylabel("speedup over the exact step")
+        axes[1][k].set_ylabel("N_E (joints computed)")
+        axes[1][k].set_xlabel("final relative displacement error")
+    return finish(fig, [a for row in axes for a in row], out)
 
 
 def tip_paths(path, out):
@@ -258,6 +288,7 @@ def main(argv):
         (f"{s}-fig1-chain30.png", lambda o: tip_paths(
             os.path.join(d, f"{s}-chain30-tip.csv"), o)),
         ("scaling.png", lambda o: scaling(os.path.join(d, "scaling.jsonl"), o)),
+        ("world-measures.png", lambda o: world_measures(d, o)),
     ]
     for name, job in jobs:
         out = os.path.join(d, name)

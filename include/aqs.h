@@ -462,6 +462,16 @@ AQS_API aqs_status aqs_linkage_get_dca_form(const aqs_linkage *linkage, int32_t 
 #define AQS_METRIC_REL_LINKAGE 1 /**< the above / sqrt(sum over all joints) */
 #define AQS_METRIC_ABS_JOINT 2   /**< max ||qdd_j|| over uncomputed j */
 #define AQS_METRIC_REL_JOINT 3   /**< the above / max ||qdd_j|| over all joints */
+/** World-space measures (docs/math.md §10b): the error, caused by the
+ *  uncomputed joints, in what the bodies do. For body b with centre of mass
+ *  acceleration a_b and angular acceleration alpha_b, e_b = |delta a_b| +
+ *  ell_b |delta alpha_b|, ell_b = sqrt(tr(I_b) / (2 m_b)) the root mean square
+ *  distance of its mass from its centre of mass (0 for a point mass): a
+ *  bound on the linear acceleration error of its points at that distance.
+ *  The certified bound sums, over the queued subassemblies, sqrt(A(C)) times
+ *  their joints' lever arms (from bounding spheres of the bodies). */
+#define AQS_METRIC_ABS_WORLD 4   /**< max_b e_b (m/s^2) */
+#define AQS_METRIC_REL_WORLD 5   /**< the above / max_b (|a_b| + ell_b |alpha_b|) over all bodies */
 
 /** Set the error measure and its bound eps (finite, >= 0; 0, the default,
  *  means exact: every joint is computed). With eps > 0 a solve computes only
@@ -589,8 +599,8 @@ typedef struct aqs_solve_stats {
     int32_t certified;       /**< 1: error_bound + rounding_bound is a bound (an estimate with a
                                   safety factor, docs/math.md) and rounding_bound <= eps (eps > 0);
                                   0: no honest bound (rounding above eps, a near-singular pivot, the
-                                  inverse-inertia form, or an exact solve by the ABA, which does not
-                                  estimate its rounding) */
+                                  inverse-inertia form, a world measure (not estimated), or an exact
+                                  solve by the ABA, which does not estimate its rounding) */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

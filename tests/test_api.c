@@ -668,7 +668,7 @@ static void test_solve_errors(void **state)
     FAILS(L, &ref, aqs_linkage_step(L, -INFINITY), AQS_EINVAL, sf, "dt = -inf");
     /* the adaptive controls */
     FAILS(L, &ref, aqs_linkage_set_tolerance(L, -1, 0.1), AQS_EINVAL, "aqs_linkage_set_tolerance", "metric = -1");
-    FAILS(L, &ref, aqs_linkage_set_tolerance(L, 4, 0.1), AQS_EINVAL, "aqs_linkage_set_tolerance", "metric = 4");
+    FAILS(L, &ref, aqs_linkage_set_tolerance(L, 6, 0.1), AQS_EINVAL, "aqs_linkage_set_tolerance", "metric = 6");
     FAILS(L, &ref, aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, -0.1), AQS_EINVAL,
           "aqs_linkage_set_tolerance", "eps = -0.1");
     FAILS(L, &ref, aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, NAN), AQS_EINVAL,

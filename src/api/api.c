@@ -19,6 +19,7 @@
 #include "model.h"
 #include "stale.h"
 #include "totalacc.h"
+#include "worldbound.h"
 #include "update.h"
 
 #define STR2(x) #x
@@ -140,6 +141,7 @@ static void free_solver(aqs_linkage *L)
 {
     aba_free(L);
     adaptive_free(L);
+    worldbound_free(L);
     totalacc_free(L);
     assembly_free(L);
     model_free(L);
@@ -848,16 +850,27 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
 {
     static const char fn[] = "aqs_linkage_set_tolerance";
     aqs_status st;
+    int new_world = 0;
     CHECK_LINKAGE(L);
     if ((st = check_finalized(L, fn)) != AQS_OK) return st;
-    if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_JOINT)
+    if (metric < AQS_METRIC_ABS_LINKAGE || metric > AQS_METRIC_REL_WORLD)
         return lk_fail(L, AQS_EINVAL, "%s: metric = %d is not an AQS_METRIC_* value", fn, (int)metric);
     if (!isfinite(eps) || eps < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: eps = %g must be finite and >= 0", fn, eps);
+    if (metric >= AQS_METRIC_ABS_WORLD && !L->wb && L->t.nnodes > 0) {
+        /* the bodies' spheres: computed for every node by the next update
+         * (marked below, once nothing can fail any more) */
+        if ((st = worldbound_enable(L, fn)) != AQS_OK) return st;
+        new_world = 1;
+    }
     if (eps > 0.0 && !L->t.tdata && L->t.nnodes > 0) {
-        if ((st = totalacc_enable(L, fn)) != AQS_OK) return st;
+        if ((st = totalacc_enable(L, fn)) != AQS_OK) {
+            if (new_world) worldbound_free(L); /* nothing changed */
+            return st;
+        }
         stale_tree(L);
     }
+    if (new_world) stale_tree(L);
     L->s.metric = metric;
     L->s.eps = eps;
     stale_settings(L);

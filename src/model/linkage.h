@@ -281,6 +281,7 @@ struct aqs_linkage {
     int fb_last;          /* the last solve was such an exact solve */
     aba_state aba;
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
+    struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;

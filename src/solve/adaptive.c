@@ -15,6 +15,7 @@
 #include "rounding.h"
 #include "stale.h"
 #include "totalacc.h"
+#include "worldbound.h"
 
 aqs_status adaptive_alloc(aqs_linkage *L)
 {
@@ -111,6 +112,7 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
     const int counted = L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE;
     dca_node_backsub(L, n);
     rounding_backsub(L, n, counted);
+    if (worldbound_active(L)) worldbound_processed(L, n); /* children's world poses */
     s->processed[s->nprocessed++] = n;
     if (counted) {
         double q = norm_qdd(L, n);
@@ -133,10 +135,12 @@ static void push(aqs_linkage *L, heap *h, int32_t n)
 {
     solve_state *s = &L->s;
     double a = totalacc_eval(L, n);
+    /* the world measures queue by E_n, the node's bound (src/solve/worldbound.c) */
+    double key = worldbound_active(L) ? worldbound_key(L, n, a) : a;
     const node *nd = &L->t.nodes[n];
     s->aval[n] = a;
-    heap_push(h, a, n);
-    s->sum += a;
+    heap_push(h, key, n);
+    s->sum += key;
     if (nd->ncount > 0) {
         double low = sqrt(a / nd->ncount);
         if (low > s->lower) s->lower = low;
@@ -150,6 +154,8 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     const solve_state *s = &L->s;
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
+    case AQS_METRIC_ABS_WORLD: return sum; /* sum of the queued E_n */
+    case AQS_METRIC_REL_WORLD: return sum > 0.0 ? sum / (L->wb ? L->wb->lower : 0.0) : 0.0;
     case AQS_METRIC_REL_LINKAGE: {
         /* A(root) = the computed joints' squares + the queued A (every joint
          * is in one or the other): used when the root's T was not updated */
@@ -210,10 +216,12 @@ void adaptive_predict_clear(aqs_linkage *L)
 
 /* The largest A a queued node can have when the solve stops at eps: one
  * node above it keeps the solve going, whichever the measure. */
-static double stop_level(const solve_state *s, double eps)
+static double stop_level(const aqs_linkage *L, double eps)
 {
+    const solve_state *s = &L->s;
     switch (s->metric) {
     case AQS_METRIC_REL_JOINT: return eps * eps * s->lower * s->lower;
+    case AQS_METRIC_REL_WORLD: return L->wb ? eps * eps * L->wb->lower * L->wb->lower : 0.0;
     case AQS_METRIC_REL_LINKAGE: return eps * eps * (s->a_root >= 0.0 ? s->a_root : s->comp_sq + s->sum);
     default: return eps * eps;
     }
@@ -227,7 +235,7 @@ static void predict_next(aqs_linkage *L, double eps)
 {
     solve_state *s = &L->s;
     const tree *t = &L->t;
-    const double thr = s->margin * stop_level(s, eps);
+    const double thr = s->margin * stop_level(L, eps);
     int32_t i;
     if (!adaptive_predict_usable(L)) {
         adaptive_predict_clear(L);
@@ -248,7 +256,11 @@ static void predict_next(aqs_linkage *L, double eps)
     }
     for (i = 0; i < s->nprocessed; i++) {
         int32_t n = s->processed[i], p = t->nodes[n].parent;
-        if ((p < 0 || (s->pred[p] & 2)) && (t->nodes[n].forced || s->aval[n] >= thr)) s->pred[n] |= 2;
+        /* the world measures compare E_n^2 (its key, squared) */
+        double key = worldbound_active(L) ? worldbound_key(L, n, s->aval[n]) : 0.0;
+        if (worldbound_active(L)) key *= key;
+        else key = s->aval[n];
+        if ((p < 0 || (s->pred[p] & 2)) && (t->nodes[n].forced || key >= thr)) s->pred[n] |= 2;
     }
     s->npred = 0;
     for (i = 0; i < s->nprocessed; i++) {
@@ -348,6 +360,7 @@ void adaptive_solve(aqs_linkage *L)
         /* A(root) from its factor, unless the prediction skipped it (then
          * from the computed and queued joints, bound_of) */
         s->a_root = s->tstale[t->root] ? -1.0 : totalacc_eval(L, t->root);
+        if (worldbound_active(L)) worldbound_begin(L);
         /* Nodes on the way to a free joint are always computed: the floating
          * base's acceleration is not part of the approximation (§3.7); so
          * are the predicted ones. They are processed first, parents before

@@ -265,6 +265,12 @@ void rounding_finish(aqs_linkage *L)
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: tot = T + r2; break;
     case AQS_METRIC_ABS_JOINT: tot = T + rmax; break;
+    case AQS_METRIC_ABS_WORLD:
+    case AQS_METRIC_REL_WORLD:
+        /* not estimated for the world measures (the joint errors are not
+         * carried to the bodies): no honest bound, certified = 0 */
+        tot = INFINITY;
+        break;
     case AQS_METRIC_REL_LINKAGE:
         /* ||ref_all|| >= sqrt(A(root)) - r2 */
         tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);

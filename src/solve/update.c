@@ -12,6 +12,7 @@
 #include "kintree.h"
 #include "stale.h"
 #include "totalacc.h"
+#include "worldbound.h"
 
 /* Refresh a leaf's b and mark its ancestors. While the whole tree is stale
  * (all_dirty: after an exact step by the articulated-body algorithm, which
@@ -100,6 +101,7 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
+    if (L->wb) worldbound_node_update(L, n); /* its bodies' sphere */
     if (L->t.tdata) {
         solve_state *s = &L->s;
         if (s->pred && s->pred[n]) {

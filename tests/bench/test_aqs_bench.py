@@ -30,6 +30,8 @@ REQUIRED = {
     "ratio_R_aba": float,
     "auto": bool, "auto_exact_steps": int, "auto_cost_adaptive": (int, float),
     "auto_cost_exact": (int, float),
+    "displacement_error_per_step": (int, float), "displacement_error_mean": (int, float),
+    "displacement_checkpoints": int,
 }
 
 
@@ -131,15 +133,13 @@ def test_displacement_error_recomputed(tmp_path):
             L.set_auto(False)  # the adaptive solver, as aqs-bench measures it by default
             L.set_body_force(29, (0, 1, 0), point=(1, 0, 0))
             L.set_tolerance("rel_joint", eps)
-            start = None
+            track = []
             for k in range(41):
                 poses = [L.body_pose(b) for b in range(30)]
-                coms = np.array([p + aqs_rotate(q, (0.5, 0, 0)) for p, q in poses])
-                if k == 0:
-                    start = coms
+                track.append(np.array([p + aqs_rotate(q, (0.5, 0, 0)) for p, q in poses]))
                 if k < 40:
                     L.step(d["dt"])
-            return coms - start
+            return np.array(track) - track[0]  # displacements after 0 .. 40 steps
 
     def aqs_rotate(q, v):
         w, x, y, z = q
@@ -149,9 +149,16 @@ def test_displacement_error_recomputed(tmp_path):
         return R @ np.asarray(v, dtype=float)
 
     exact, approx = com_positions(0.0), com_positions(2.0 ** -4)
-    err = np.max(np.linalg.norm(approx - exact, axis=1)) / np.max(np.linalg.norm(exact, axis=1))
+    errs = [np.max(np.linalg.norm(approx[k] - exact[k], axis=1)) / np.max(np.linalg.norm(exact[k], axis=1))
+            for k in range(1, 41)]
+    err = errs[-1]
     assert err > 0
     assert d["displacement_error"] == pytest.approx(err, rel=1e-8)
+    # the two readings of the paper's "per time step": final / steps, and the
+    # mean over the steps of the error after each (every step a checkpoint)
+    assert d["displacement_checkpoints"] == 40
+    assert d["displacement_error_per_step"] == pytest.approx(err / 40, rel=1e-8)
+    assert d["displacement_error_mean"] == pytest.approx(np.mean(errs), rel=1e-7)
 
 
 def test_fallback(tmp_path):

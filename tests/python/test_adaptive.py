@@ -656,7 +656,7 @@ def test_bad_metric():
         err = raises(aqs.InvalidArgument, lambda: L.set_tolerance("abs", 0.1),
                      "aqs_linkage_set_tolerance", "metric", "'abs'", "rel_joint")
         assert isinstance(err, ValueError)
-        for bad in (4, -1, 99):
+        for bad in (6, -1, 99):
             raises(aqs.InvalidArgument, lambda: L.set_tolerance(bad, 0.1),
                    "aqs_linkage_set_tolerance", "metric", str(bad))
             assert "metric" in L.last_error

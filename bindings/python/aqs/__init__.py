@@ -79,7 +79,8 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN,
                    PATH_ADAPTIVE, PATH_EXACT_ABA, PATH_EXACT_DCA,
                    DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
-                   TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE, METRICS, OK, WORLD)
+                   TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE,
+                   METRIC_ABS_WORLD, METRIC_REL_WORLD, METRICS, OK, WORLD)
 from ._lib import (SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_HULL, SHAPES,
                    COLLIDE_LAZY, COLLIDE_FULL, COLLIDE_BRUTE, COLLIDE_MODES)
 from ._lib import URDF_ROOT_FIXED, URDF_ROOT_FREE
@@ -92,7 +93,8 @@ __all__ = [
     "WORLD", "OK", "EINVAL", "ERANGE", "ESTATE", "ENOMEM", "EMODEL", "ENUMERIC", "ESIZE",
     "JOINT_REVOLUTE", "JOINT_PRISMATIC", "JOINT_SPHERICAL", "JOINT_FREE", "JOINT_FIXED",
     "JOINT_UNIVERSAL", "JOINT_CYLINDRICAL", "JOINT_PLANAR", "JOINT_KINDS",
-    "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT", "METRICS",
+    "METRIC_ABS_LINKAGE", "METRIC_REL_LINKAGE", "METRIC_ABS_JOINT", "METRIC_REL_JOINT",
+    "METRIC_ABS_WORLD", "METRIC_REL_WORLD", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
     "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN",
@@ -853,11 +855,16 @@ class Linkage:
         metric: "abs_linkage" (sqrt of the sum of ||qdd_j||^2 over the joints
         not computed), "rel_linkage" (that / the same over all joints),
         "abs_joint" (max ||qdd_j|| over the joints not computed), "rel_joint"
-        (that / max ||qdd_j|| over all joints), or an aqs.METRIC_* constant.
+        (that / max ||qdd_j|| over all joints), "abs_world" (max over the
+        bodies of e_b = |delta a_b| + ell_b |delta alpha_b|, the error of the
+        centre-of-mass and angular accelerations the uncomputed joints cause,
+        ell_b = sqrt(tr(I_b) / (2 m_b))), "rel_world" (that / max_b of the
+        same of the accelerations), or an aqs.METRIC_* constant.
         ||qdd_j|| is the 2-norm of joint j's acceleration vector; free joints
         are always computed exactly and not counted.
-        eps: finite, >= 0; m/s^2 or rad/s^2 for the absolute measures, a pure
-        number for the relative ones. 0 (the default) means exact.
+        eps: finite, >= 0; m/s^2 or rad/s^2 for the absolute measures (m/s^2
+        for abs_world), a pure number for the relative ones. 0 (the default)
+        means exact.
         """
         f = "aqs_linkage_set_tolerance"
         self._call(f, _named(metric, METRICS, f, "metric"), _number(eps, f, "eps"))

@@ -68,12 +68,18 @@ METRIC_ABS_LINKAGE = 0  # sqrt(sum of ||qdd_j||^2 over uncomputed j)
 METRIC_REL_LINKAGE = 1  # the above / sqrt(sum over all joints)
 METRIC_ABS_JOINT = 2    # max ||qdd_j|| over uncomputed j
 METRIC_REL_JOINT = 3    # the above / max ||qdd_j|| over all joints
+# World-space measures: e_b = |delta a_b| + ell_b |delta alpha_b| per body
+# (centre-of-mass and angular acceleration errors; docs/math.md section 10a).
+METRIC_ABS_WORLD = 4    # max_b e_b over all bodies
+METRIC_REL_WORLD = 5    # the above / max_b (|a_b| + ell_b |alpha_b|)
 
 METRICS = {
     "abs_linkage": METRIC_ABS_LINKAGE,
     "rel_linkage": METRIC_REL_LINKAGE,
     "abs_joint": METRIC_ABS_JOINT,
     "rel_joint": METRIC_REL_JOINT,
+    "abs_world": METRIC_ABS_WORLD,
+    "rel_world": METRIC_REL_WORLD,
 }
 METRIC_NAMES = {value: name for name, value in METRICS.items()}
 

@@ -1,0 +1,42 @@
+/* worldbound.h -- the world-space error measures (AQS_METRIC_ABS_WORLD,
+ * AQS_METRIC_REL_WORLD; docs/math.md §10b): per assembly-tree node, a
+ * bounding sphere of its bodies' centres of mass and joint origins (kept in
+ * the node's frame, recomputed by the lazy update with the node's other
+ * coefficients) and the static sums of its joints' motion-subspace norms;
+ * per solve, the world pose of every node reached and a lower bound on the
+ * largest body acceleration. */
+#ifndef AQS_WORLDBOUND_H
+#define AQS_WORLDBOUND_H
+
+#include "linkage.h"
+
+struct worldbound {
+    double *sph;          /* 4 per node: centre (node frame), radius (< 0: no point) */
+    double *sl2, *sa2;    /* per node: sum over the counted joints inside of sigma_lin^2, sigma_ang^2 */
+    double *lmax;         /* per node: largest length scale ell_b of a body inside (static) */
+    unsigned char *holds; /* per node: it holds up a joint whose child side is outside it */
+    pose *wpose;          /* per node: world pose of its frame (root: identity), set when
+                             its parent is processed (valid for processed and queued nodes) */
+    double *ell;          /* per body: ell_b = sqrt(tr(I_com) / (2 m)) (0 if m <= 0) */
+    double lower;         /* lower bound on max_b e(a_b) from the reached leaves */
+};
+
+/* Whether the linkage's metric is a world one (and the data exist). */
+int worldbound_active(const aqs_linkage *L);
+/* Allocate and set up the static data (first world metric). The caller
+ * marks the whole tree stale so that every node's sphere is computed.
+ * AQS_OK or AQS_ENOMEM (message naming fn; nothing changed). */
+aqs_status worldbound_enable(aqs_linkage *L, const char *fn);
+void worldbound_free(aqs_linkage *L);
+/* Internal node n's sphere from its children's (after its frames moved). */
+void worldbound_node_update(aqs_linkage *L, int32_t n);
+/* A solve starts: the root's world pose, lower bound 0. */
+void worldbound_begin(aqs_linkage *L);
+/* Node n was back-substituted: its children's world poses, and the exact
+ * accelerations of its leaf children raise the lower bound. */
+void worldbound_processed(aqs_linkage *L, int32_t n);
+/* The bound E_n on node n's contribution to max_b e(delta a_b), from its
+ * total acceleration A(n) (the node's world pose must be set). */
+double worldbound_key(const aqs_linkage *L, int32_t n, double a);
+
+#endif
