@@ -179,7 +179,10 @@ static void test_choice_follows_counts(void **state)
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(T);
     }
-    assert_true(adaptive_kept >= 2);
+    /* at least the one-force case (asserted above); with the exact pass at
+     * ~1,560 instructions per joint (cost.h) the break-even on this 4,000-joint
+     * tree lies between 1 and 2 forces */
+    assert_true(adaptive_kept >= 1);
     (void)near;
 }
 
