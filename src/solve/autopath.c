@@ -58,8 +58,12 @@ static double node_cost(const aqs_linkage *L)
     return L->dca_form == AQS_DCA_FORM_PHI ? COST_DCA_NODE_PHI : COST_DCA_NODE_SQRT;
 }
 
-void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive, double *exact,
-                    double *stale)
+/* The model's costs (instructions) of the next solve, or step when stepping
+ * = 1, by each path; *stale: the part of *adaptive that recomputes nodes
+ * already stale (the switch cost after exact steps). Reads the current
+ * stale marks; changes nothing. */
+static void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive, double *exact,
+                           double *stale)
 {
     const tree *t = &L->t;
     const solve_state *s = &L->s;

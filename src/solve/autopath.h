@@ -15,12 +15,6 @@ void autopath_reset(aqs_linkage *L);
 /* Whether the model chooses the path of the next solve: on, eps > 0, no
  * cap, something that can move, and counts known. */
 int autopath_applies(const aqs_linkage *L);
-/* The model's costs (instructions) of the next solve, or step when stepping
- * = 1, by each path; *stale: the part of *adaptive that recomputes nodes
- * already stale (the switch cost after exact steps). Reads the current
- * stale marks; changes nothing. */
-void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive, double *exact,
-                    double *stale);
 /* At the end of a step, before the update after its move: whether the
  * next step would be exact once that update is done (the stale nodes are
  * then the moved ones, none after it); if so the update is skipped (an

@@ -10,7 +10,8 @@
 #include "kintree.h"
 #include "stale.h"
 
-void frames_leaf(aqs_linkage *L, int32_t n)
+/* Handle-frame poses of a leaf in its composite's frame (constant). */
+static void frames_leaf(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     const node *nd = &t->nodes[n];
@@ -50,7 +51,8 @@ void frames_node(aqs_linkage *L, int32_t n)
     if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
-void frames_all(aqs_linkage *L)
+/* All internal nodes' cross poses, children first. O(N). */
+static void frames_all(aqs_linkage *L)
 {
     int32_t n;
     for (n = 0; n < L->t.nnodes; n++)

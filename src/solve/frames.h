@@ -6,14 +6,10 @@
 
 #include "linkage.h"
 
-/* Handle-frame poses of a leaf in its composite's frame (constant). */
-void frames_leaf(aqs_linkage *L, int32_t n);
 /* Cross poses of an internal node from its children and q_k, and J(q_k)
  * itself (the child frame of k in its joint frame, which dca_node_update
  * reads): call whenever q_k or a position inside the node changes. */
 void frames_node(aqs_linkage *L, int32_t n);
-/* All internal nodes' cross poses, children first. O(N). */
-void frames_all(aqs_linkage *L);
 /* Cross poses of the node of effective joint e and its ancestors. O(log N).
  * Nothing while every pose is stale (frames_poses recomputes them all). */
 void frames_from_joint(aqs_linkage *L, int32_t e);
