@@ -586,7 +586,7 @@ static void test_bound_scenes(void **state)
 /* ------------------------------------------------------------ the spheres */
 
 /* World pose of node n's frame: the frame of the leaf reached by A children. */
-static void node_world(const aqs_linkage *L, int32_t n, pose *P)
+static void node_world(aqs_linkage *L, int32_t n, pose *P)
 {
     while (L->t.nodes[n].joint >= 0) n = L->t.nodes[n].a;
     frames_comp_world(L, L->t.nodes[n].comp, P);
