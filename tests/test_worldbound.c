@@ -328,6 +328,7 @@ static void check_linkage(aqs_linkage *L, aqs_linkage *X, double floor_rel, tall
         for (k = 0; k <= 20; k += 2) {
             double eps = ldexp(1.0, -k);
             assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
+            assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
             if (aqs_linkage_solve(L) != AQS_OK) fail_msg("solve: %s", aqs_linkage_last_error(L));
             check_one(L, X, metric, eps, floor_rel, t);
         }
@@ -501,7 +502,9 @@ static void test_bound_trajectories(void **state)
         rng = r0;
         X = random_linkage(&rng, &sp);
         assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_set_tolerance(O, metric, eps), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(O, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_get_prediction(L, &margin), AQS_OK);
         assert_true(margin == AQS_PREDICTION_MARGIN);
         assert_int_equal(aqs_linkage_set_prediction(O, 0.0), AQS_OK);
@@ -568,6 +571,7 @@ static void test_bound_scenes(void **state)
         int step;
         check_linkage(L, X, 1e-12, &t);
         assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, ldexp(1.0, -15)), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         for (step = 0; step < 6; step++) {
             twin_positions(L, X);
             assert_int_equal(aqs_linkage_solve(X), AQS_OK);
@@ -610,11 +614,13 @@ static void test_spheres_lazy(void **state)
         rng = r0;
         Y = random_linkage(&rng, &sp);
         assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         for (step = 0; step < 20; step++)
             if (aqs_linkage_step(L, 0.05) != AQS_OK) fail_msg("step: %s", aqs_linkage_last_error(L));
         assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* brings the tree up to date */
         twin_positions(L, Y);
         assert_int_equal(aqs_linkage_set_tolerance(Y, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(Y, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_solve(Y), AQS_OK); /* a full update */
         com = malloc(sizeof(double) * 3 * (size_t)L->nbodies);
         com_world(L, com, NULL);
@@ -661,6 +667,7 @@ static void test_api(void **state)
     assert_int_equal(aqs_linkage_set_tolerance(L, -1, 0.1), AQS_EINVAL);
     assert_null(L->wb); /* nothing allocated by a refused call */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     st.size = sizeof st;
     assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
@@ -673,6 +680,7 @@ static void test_api(void **state)
     assert_true(st.error_bound <= b1 / 8);
     /* a cap reports the bound reached */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-12), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
     assert_int_equal(aqs_linkage_set_max_computed(L, 3), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
@@ -716,7 +724,9 @@ static void test_out_of_memory(void **state)
             assert_int_equal(st, AQS_OK);
         cs.fail_at = 0;
         assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_set_tolerance(R, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(R, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
         assert_int_equal(aqs_linkage_solve(R), AQS_OK);
         a.size = b.size = sizeof a;
