@@ -598,6 +598,37 @@ static void test_inertia_transform(void **state)
     }
 }
 
+/* sphere_merge: the result holds both spheres (every point of each, up to
+ * the relative 1e-12 it rounds up by) and is the smallest such sphere when
+ * neither holds the other (radius (d + r1 + r2) / 2); an empty side gives
+ * the other; a sphere inside the other gives the larger. */
+static void test_sphere_merge(void **state)
+{
+    uint64_t s = 77;
+    int k, i;
+    (void)state;
+    for (k = 0; k < 2000; k++) {
+        double a[4], b[4], m[4], d;
+        for (i = 0; i < 3; i++) a[i] = test_uniform(&s, -5, 5), b[i] = test_uniform(&s, -5, 5);
+        a[3] = test_uniform(&s, 0, 3);
+        b[3] = test_uniform(&s, 0, 3);
+        sphere_merge(a, b, m);
+        d = vec3_dist(a, b);
+        assert_true(vec3_dist(m, a) + a[3] <= m[3] * (1 + 1e-13) + 1e-13);
+        assert_true(vec3_dist(m, b) + b[3] <= m[3] * (1 + 1e-13) + 1e-13);
+        if (d + b[3] <= a[3]) assert_true(memcmp(m, a, sizeof m) == 0);
+        else if (d + a[3] <= b[3]) assert_true(memcmp(m, b, sizeof m) == 0);
+        else assert_true(fabs(m[3] - 0.5 * (d + a[3] + b[3])) <= 1e-11 * m[3]);
+    }
+    {
+        double e[4] = {1, 2, 3, -1}, b[4] = {4, 5, 6, 0.5}, m[4];
+        sphere_merge(e, b, m);
+        assert_true(memcmp(m, b, sizeof m) == 0);
+        sphere_merge(b, e, m);
+        assert_true(memcmp(m, b, sizeof m) == 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -605,6 +636,7 @@ int main(void)
         cmocka_unit_test(test_quat_mul),
         cmocka_unit_test(test_rotvec_axis_angle),
         cmocka_unit_test(test_pose_compose_inverse),
+        cmocka_unit_test(test_sphere_merge),
         cmocka_unit_test(test_vec3_mat3),
         cmocka_unit_test(test_spatial_transforms),
         cmocka_unit_test(test_spatial_inertia_definition),

@@ -396,3 +396,23 @@ void spatial_force_from_parent(const pose *P, const double f[6], double out[6])
     out[4] = o[1];
     out[5] = o[2];
 }
+
+double vec3_dist(const double a[3], const double b[3])
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(vec3_dot(d, d));
+}
+
+void sphere_merge(const double *s1, const double *s2, double *out)
+{
+    double d, R;
+    int i;
+    if (s1[3] < 0.0) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    if (s2[3] < 0.0) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    d = vec3_dist(s1, s2);
+    if (d + s2[3] <= s1[3]) { memcpy(out, s1, 4 * sizeof(double)); return; }
+    if (d + s1[3] <= s2[3]) { memcpy(out, s2, 4 * sizeof(double)); return; }
+    R = 0.5 * (d + s1[3] + s2[3]);
+    for (i = 0; i < 3; i++) out[i] = s1[i] + (R - s1[3]) / d * (s2[i] - s1[i]);
+    out[3] = R * (1.0 + 1e-12);
+}

@@ -46,7 +46,13 @@ void spatial_inertia(double m, const double c[3], const double Ic[9], double I[3
 /* I_G = X* I_F X*^T for the frame F with pose P in G (force transform). */
 void spatial_inertia_to_parent(const pose *P, const double IF[36], double IG[36]);
 
-#endif
+/* Spheres (cx, cy, cz, r); r < 0: empty. */
+/* Euclidean distance of two points. */
+double vec3_dist(const double a[3], const double b[3]);
+/* A sphere enclosing two spheres (the smallest), its centre on the segment
+ * between theirs; the radius rounded up by a relative 1e-12 (the broadphase's
+ * and the world bound's hierarchies). out may alias neither. */
+void sphere_merge(const double *s1, const double *s2, double *out);
 
 /* Structured actions of X = spatial_from_parent(P) (cheaper than 6x6 products). */
 /* out = X v (motion vector from the parent frame into P's frame). */
@@ -59,3 +65,5 @@ void spatial_xform_rows(const pose *P, const double *B, double *out);
 void spatial_xform_congruence(const pose *P, const double *S, double *out);
 /* out = force vector f (given in the parent frame) in P's frame: [R^T (n - p x f); R^T f]. */
 void spatial_force_from_parent(const pose *P, const double f[6], double out[6]);
+
+#endif

@@ -59,12 +59,6 @@ static int pair_allowed(const aqs_linkage *L, const collision *c, int32_t i, int
 
 /* ------------------------------------------------------------ spheres */
 
-static double dist3(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return sqrt(vec3_dot(d, d));
-}
-
 /* Spheres (cx, rx), (cy, ry) in one frame may overlap: conservative by a
  * relative 1e-9 of the radii and 1e-12 of the coordinates, for rounding in
  * the transforms (squared distances: no square root). */
@@ -76,20 +70,6 @@ static int spheres_overlap(const double cx[3], double rx, const double cy[3], do
     return d0 * d0 + d1 * d1 + d2 * d2 <= r * r;
 }
 
-/* Smallest sphere enclosing two spheres (radius < 0: empty). */
-static void merge(const double *s1, const double *s2, double *out)
-{
-    double d, R;
-    int i;
-    if (s1[3] < 0.0) { memcpy(out, s2, 4 * sizeof(double)); return; }
-    if (s2[3] < 0.0) { memcpy(out, s1, 4 * sizeof(double)); return; }
-    d = dist3(s1, s2);
-    if (d + s2[3] <= s1[3]) { memcpy(out, s1, 4 * sizeof(double)); return; }
-    if (d + s1[3] <= s2[3]) { memcpy(out, s2, 4 * sizeof(double)); return; }
-    R = 0.5 * (d + s1[3] + s2[3]);
-    for (i = 0; i < 3; i++) out[i] = s1[i] + (R - s1[3]) / d * (s2[i] - s1[i]);
-    out[3] = R * (1.0 + 1e-12);
-}
 
 /* ------------------------------------------------------------ frames */
 
@@ -265,7 +245,7 @@ static void refit(aqs_linkage *L, collision *c, int32_t n)
     sb[1] += Pk.p[1];
     sb[2] += Pk.p[2];
     sb[3] = c->sph[4 * C->b + 3];
-    merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
+    sphere_merge(c->sph + 4 * C->a, sb, c->sph + 4 * n);
 }
 
 /* Certificate margins (0 for shapeless nodes, never certified): a node's
@@ -310,7 +290,7 @@ static void fit_leaf(aqs_linkage *L, collision *c, int32_t n)
         w[0] += c->shape_in[i].p[0];
         w[1] += c->shape_in[i].p[1];
         w[2] += c->shape_in[i].p[2];
-        d = dist3(w, ctr) + c->shapes[i].radius;
+        d = vec3_dist(w, ctr) + c->shapes[i].radius;
         if (d > r) r = d;
     }
     memcpy(s, ctr, sizeof ctr);

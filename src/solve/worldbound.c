@@ -36,27 +36,6 @@ void worldbound_free(aqs_linkage *L)
     L->wb = NULL;
 }
 
-static double dist3(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return sqrt(vec3_dot(d, d));
-}
-
-/* A sphere enclosing two spheres (radius < 0: empty), its centre on the
- * segment between theirs; the radius is rounded up by a relative 1e-12. */
-static void merge(const double *s1, const double *s2, double *out)
-{
-    double d, R;
-    int i;
-    if (s1[3] < 0.0) { memcpy(out, s2, 4 * sizeof(double)); return; }
-    if (s2[3] < 0.0) { memcpy(out, s1, 4 * sizeof(double)); return; }
-    d = dist3(s1, s2);
-    if (d + s2[3] <= s1[3]) { memcpy(out, s1, 4 * sizeof(double)); return; }
-    if (d + s1[3] <= s2[3]) { memcpy(out, s2, 4 * sizeof(double)); return; }
-    R = 0.5 * (d + s1[3] + s2[3]);
-    for (i = 0; i < 3; i++) out[i] = s1[i] + (R - s1[3]) / d * (s2[i] - s1[i]);
-    out[3] = R * (1.0 + 1e-12);
-}
 
 /* Largest singular value of rows [r0, r0 + 3) of S (6 x d), bounded by
  * Gershgorin on the d x d Gram matrix (exact for orthogonal columns). */
@@ -107,7 +86,7 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
         double p[3], d;
         mat3_vec(m->body_in_comp[b].R, L->bodies[b].com, p);
         for (i = 0; i < 3; i++) p[i] += m->body_in_comp[b].p[i];
-        d = dist3(p, s);
+        d = vec3_dist(p, s);
         if (d > r) r = d;
     }
     s[3] = r * (1.0 + 1e-12);
@@ -202,7 +181,7 @@ void worldbound_node_update(aqs_linkage *L, int32_t n)
     tb[1] += Pk.p[1];
     tb[2] += Pk.p[2];
     tb[3] = sb[3];
-    merge(w->sph + 4 * C->a, tb, w->sph + 4 * n);
+    sphere_merge(w->sph + 4 * C->a, tb, w->sph + 4 * n);
 }
 
 void worldbound_begin(aqs_linkage *L)
@@ -290,7 +269,7 @@ double worldbound_key(const aqs_linkage *L, int32_t n, double a)
         c[0] += P->p[0];
         c[1] += P->p[1];
         c[2] += P->p[2];
-        far = R + dist3(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
+        far = R + vec3_dist(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
         if (far > rho) rho = far;
     }
     return sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n])) * (1.0 + 1e-12);
