@@ -3,7 +3,7 @@
 // of numerically hard linkages.
 //
 //   build/tests/reference/hardcases [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref quad|ld]
-//                                   [--dca-form sqrt|phi]
+//                                   [--dca-form sqrt|phi] [--seeds N]
 //
 // Quick mode (default; `make check-hard`, part of `make check`): sizes up to 2,000 links,
 // well under 60 s. Long mode (--long; `make bench-hard`): chains to 10^6 links (the
@@ -498,7 +498,7 @@ std::string fmt(const char *f, double x) {
     return b;
 }
 
-std::vector<Spec> make_specs(bool long_mode) {
+std::vector<Spec> make_specs(bool long_mode, int nseeds) {
     std::vector<Spec> s;
     auto add = [&](const std::string &fam, const std::string &name, int size,
                    std::function<void(Case &)> f) { s.push_back({fam, fam + "/" + name, f, size, 0.0}); };
@@ -540,6 +540,25 @@ std::vector<Spec> make_specs(bool long_mode) {
         add("prismatic", "n=" + std::to_string(n), n, [=](Case &c) { build_prismatic(c, n, 1); });
     for (double k : {1e-4, 1e-8, 1e-12})
         add("floating", "k=" + fmt("%.0e", k), 25, [=](Case &c) { build_floating(c, k, 1); });
+    // --seeds N: the seeded hard families again with seeds 2..N (near_eq 3..N), named
+    // ".../seed=k", to tell a formulation change from rounding noise (a single seed misleads:
+    // equivalent reorderings move single cases 0.2-8x).
+    for (uint64_t seed = 2; seed <= (uint64_t)nseeds; ++seed) {
+        const std::string sfx = "/seed=" + std::to_string(seed);
+        for (double k : {1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-16})
+            add("pointmass", "chain6/k=" + fmt("%.0e", k) + sfx, 6, [=](Case &c) { build_pointmass(c, k, false, seed); });
+        for (double ratio : {1e3, 1e6, 1e9})
+            add("altmass", "r=" + fmt("%.0e", ratio) + "/n=100" + sfx, 100,
+                [=](Case &c) { build_altmass(c, 100, ratio, seed); });
+        if (seed > 2)
+            for (double d : {1e-6, 1e-10})
+                add("near_eq", "delta=" + fmt("%.0e", d) + sfx, 120,
+                    [=](Case &c) { build_near_eq(c, d, seed); }), s.back().delta = d;
+        for (double mu : {1e-6, 1e-9, 1e-12})
+            add("lightdistal", "mu=" + fmt("%.0e", mu) + sfx, 40, [=](Case &c) { build_lightdistal(c, mu, seed); });
+        for (double k : {1e-4, 1e-8, 1e-12})
+            add("floating", "k=" + fmt("%.0e", k) + sfx, 25, [=](Case &c) { build_floating(c, k, seed); });
+    }
     return s;
 }
 
@@ -741,6 +760,7 @@ double pendulum_check() {
 int main(int argc, char **argv) {
     bool long_mode = false, sweep_long = false;
     std::string json_path, only, ref_kind = "auto";
+    int nseeds = 1;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--long") long_mode = true;
@@ -748,10 +768,11 @@ int main(int argc, char **argv) {
         else if (a == "--json" && i + 1 < argc) json_path = argv[++i];
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else if (a == "--ref" && i + 1 < argc) ref_kind = argv[++i];
+        else if (a == "--seeds" && i + 1 < argc && std::atoi(argv[i + 1]) >= 1) nseeds = std::atoi(argv[++i]);
         else if (a == "--dca-form" && i + 1 < argc && (std::strcmp(argv[i + 1], "sqrt") == 0 || std::strcmp(argv[i + 1], "phi") == 0))
             g_dca_form = std::strcmp(argv[++i], "phi") == 0 ? AQS_DCA_FORM_PHI : AQS_DCA_FORM_SQRT;
         else {
-            std::fprintf(stderr, "usage: %s [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi] [--seeds N]\n", argv[0]);
             return 2;
         }
     }
@@ -793,7 +814,7 @@ int main(int argc, char **argv) {
     std::printf("%-42s %8s %9s %9s %-30s %-11s %-11s %-11s %-11s %s\n", "case", "dofs",
                 "ref ld/q", "ABA rel", "DCA rel (status)", "abs_link", "rel_link", "abs_joint",
                 "rel_joint", "  (adaptive: worst true/bound over eps; x = fails)");
-    for (const Spec &sp : make_specs(long_mode)) {
+    for (const Spec &sp : make_specs(long_mode, nseeds)) {
         if (!only.empty() && sp.name.find(only) == std::string::npos) continue;
         const double t0 = now();
         Case c;
