@@ -287,6 +287,7 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->poses);
     lk_free(L, t->data);
     lk_free(L, t->rnd_x);
+    lk_free(L, t->rnd_node);
     lk_free(L, t->node_of_eff);
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);

@@ -50,12 +50,8 @@ typedef struct {
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
                              first jw columns (<= rank; 6 when compressed and that handle is
                              the first) */
-    /* Rounding estimate (src/solve/rounding.c, docs/math.md "The rounding term"),
-     * relative error levels in units of u: rk of the node's reduced factors
-     * (U, E, QX, FX), rkb of its b; absolute errors (2-norms) of rho and
-     * gamma; resub the largest rho error in the subtree. (The handle forces'
-     * errors are per handle: tree.rnd_x.) */
-    double rk, rkb, rerho, regam, resub;
+    /* The rounding estimate's per-node levels are in tree.rnd_node (allocated with the
+     * DCA coefficients, not held by a linkage solved only exactly). */
 } node;
 
 typedef struct {
@@ -95,6 +91,11 @@ typedef struct {
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
                           allocated by dca_enable */
+    double *rnd_node;  /* 5 per node, allocated by dca_enable (src/solve/rounding.c, docs/math.md
+                          "The rounding term"): relative error levels in units of u, RND_K of the
+                          node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
+                          (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
+                          error in the subtree */
     int poses_stale; /* the internal nodes' poses (and J) do not follow q: frames_poses
                         recomputes them when the DCA, the adaptive solver, collision or a
                         world-pose query needs them (src/model/stale.c decides) */

@@ -25,6 +25,8 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     if (t->data) return AQS_OK;
     if (!t->rnd_x && !(t->rnd_x = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
+    if (!t->rnd_node && !(t->rnd_node = lk_calloc(L, 5 * (size_t)t->nnodes + 1, sizeof(double))))
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     if (frames_poses_alloc(L) != AQS_OK || model_inverse_alloc(L) != AQS_OK) /* read below */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
