@@ -749,7 +749,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
     for (n = 0; n < t->nnodes; n++) {
         const node *nd = &t->nodes[n];
         int64_t h = nd->nh, c = 6 * h + 1, i, j, r;
-        memcpy(s->phi_b + k, t->data + nd->lam, sizeof(double) * (size_t)(36 * h * h));
+        memcpy(s->phi_b + k, t->data + nd_lam(nd), sizeof(double) * (size_t)(36 * h * h));
         k += 36 * h * h;
         memcpy(s->phi_b + k, t->data + nd->bv, sizeof(double) * (size_t)(6 * h));
         k += 6 * h;

@@ -93,7 +93,7 @@ static void test_lemma1_square_root_form(void **state)
             /* the packed rows evaluate as the full ones: A = ||T_full z||^2 */
             {
                 const int32_t *perm = L->t.tperm + nd->handles;
-                const double *x = L->t.data + nd->xf;
+                const double *x = L->t.data + nd_xf(nd);
                 double sum = 0;
                 for (r = 0; r < nd->trows; r++) {
                     double v = full[(int64_t)r * cols + cols - 1];

@@ -98,7 +98,7 @@ static void merge(const double *s1, const double *s2, double *out)
 static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;
-    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + nd_J(C), Pk);
 }
 
 /* World pose of node n's child b from n's world pose (cached Pk). */

@@ -30,16 +30,11 @@ typedef struct {
     int32_t height;       /* leaves 0 */
     int32_t d;            /* dofs of the principal joint */
     int64_t handles;      /* nh effective joint indices, in tree.handles */
-    int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
-    int64_t bv, xf;       /* b (6nh), handle forces x (6nh), in tree.data */
-    int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
-    int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
-    int64_t U, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
-                                 S (6 x d); x: the node's handle forces */
-    int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
-                             about it (13 doubles, node frame; zero when grounded) */
-    int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
-                             + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi") */
+    int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses; then
+                             (internal nodes) nd_J */
+    int64_t bv;           /* b (6nh), in tree.data; then, laid out after it (the offsets are
+                             computed by the nd_ functions below, not stored): nd_xf, nd_ic,
+                             nd_lam, and for internal nodes nd_W, nd_U, nd_rho, nd_gamma, nd_S */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
     int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
     int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
@@ -53,6 +48,28 @@ typedef struct {
     /* The rounding estimate's per-node levels are in tree.rnd_node (allocated with the
      * DCA coefficients, not held by a linkage solved only exactly). */
 } node;
+
+/* A node's pooled arrays after its b (tree.data) and after its handle poses (tree.poses),
+ * in the order src/model/assembly.c's layout takes them:
+ *   xf     handle forces x (6nh)
+ *   ic     mass properties of the subassembly: mass, centre of mass, inertia about it
+ *          (13 doubles, node frame; zero when grounded)
+ *   lam    Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
+ *          + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi")
+ *   W      FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma
+ *   U, rho, gamma, S: QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
+ *          S (6 x d); x: the node's handle forces
+ *   J      in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J))
+ * (W .. S and J exist for internal nodes only.) */
+static inline int64_t nd_xf(const node *n) { return n->bv + 6 * (int64_t)n->nh; }
+static inline int64_t nd_ic(const node *n) { return n->bv + 12 * (int64_t)n->nh; }
+static inline int64_t nd_lam(const node *n) { return nd_ic(n) + 13; }
+static inline int64_t nd_W(const node *n) { return nd_lam(n) + 36 * (int64_t)n->nh * n->nh; }
+static inline int64_t nd_U(const node *n) { return nd_W(n) + 36 * (int64_t)n->nh; }
+static inline int64_t nd_rho(const node *n) { return nd_U(n) + 6 * (int64_t)n->d * n->nh; }
+static inline int64_t nd_gamma(const node *n) { return nd_rho(n) + n->d; }
+static inline int64_t nd_S(const node *n) { return nd_gamma(n) + 6; }
+static inline int64_t nd_J(const node *n) { return n->poses + n->nh; }
 
 typedef struct {
     int32_t nnodes, root;

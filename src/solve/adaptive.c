@@ -124,7 +124,7 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
         const node *c = &L->t.nodes[child[i]];
         if (c->joint >= 0) kids[nk++] = child[i];
         else if (L->m.comp_welded[c->comp]) {
-            dca_welded_forces_comp(L, c->comp, L->t.data + c->xf);
+            dca_welded_forces_comp(L, c->comp, L->t.data + nd_xf(c));
             s->reached[s->nreached++] = c->comp;
         }
     }
@@ -340,7 +340,7 @@ void adaptive_solve(aqs_linkage *L)
     stale_set_refinable(L, 0);
     if (t->nnodes == 0) { /* nothing moves */
         if (L->m.comp_welded[L->m.ncomp])
-            dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
+            dca_welded_forces_comp(L, L->m.ncomp, L->t.data + nd_xf(&t->nodes[t->leaf_of_comp[L->m.ncomp]]));
         finish_exact(L);
         rounding_finish(L);
         return;

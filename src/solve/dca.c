@@ -52,8 +52,8 @@ static void dca_leaf_phi(aqs_linkage *L, int32_t n)
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
     nd->jw = 0;
     nd->grounded = nd->comp == L->m.ncomp;
-    if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
-    else model_comp_mass(L, nd->comp, t->data + nd->ic);
+    if (nd->grounded) memset(t->data + nd_ic(nd), 0, 13 * sizeof(double));
+    else model_comp_mass(L, nd->comp, t->data + nd_ic(nd));
 }
 
 void dca_leaf_b(aqs_linkage *L, int32_t n)
@@ -75,7 +75,7 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         double Y[36], w[6];
         /* acc = I^-1 f = Y (Y^T f), through the centre of mass (the square-root
          * form's mass properties); the inverse-inertia form keeps finalize's */
-        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd->ic, Y) != 0) {
+        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd_ic(nd), Y) != 0) {
             dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, acc, 6, 6);
         } else {
             dense_tmatvec6(Y, f, w);
@@ -392,7 +392,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
-    double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
+    double *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
     double *bC = t->data + C->bv;
     const int32_t c = 6 - d, orows = 6 * C->nh;
     double E[36], U[36], G2[36], Eb[6], gw[6];
@@ -484,10 +484,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
-    const pose *J = t->poses + C->J;
-    const double *IA = t->data + A->ic, *IBb = t->data + B->ic;
-    const double *LA = t->data + A->lam, *LB = t->data + B->lam;
-    double *IC = t->data + C->ic, *LC = t->data + C->lam;
+    const pose *J = t->poses + nd_J(C);
+    const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
+    const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
+    double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
@@ -733,8 +733,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    const pose *J = t->poses + C->J;
-    double *S = t->data + C->S;
+    const pose *J = t->poses + nd_J(C);
+    double *S = t->data + nd_S(C);
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     double beta[6], bk[6];
     int32_t i;
@@ -753,7 +753,7 @@ void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *ou
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const double *FX = t->data + C->W;
+    const double *FX = t->data + nd_W(C);
     const int32_t rows = 6 * C->nh;
     int32_t i;
     for (i = 0; i < rows; i++)
@@ -767,7 +767,7 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
     const int32_t rows = 6 * C->nh;
-    memcpy(out, t->data + C->U + (int64_t)r * rows, sizeof(double) * (size_t)rows);
+    memcpy(out, t->data + nd_U(C) + (int64_t)r * rows, sizeof(double) * (size_t)rows);
 }
 
 void dca_node_backsub(aqs_linkage *L, int32_t n)
@@ -776,10 +776,10 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     const node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
-    const pose *J = (t->poses + C->J);
-    const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
-    double *xA = t->data + A->xf, *xB = t->data + B->xf;
+    const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C);
+    const pose *J = (t->poses + nd_J(C));
+    const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
+    double *xA = t->data + nd_xf(A), *xB = t->data + nd_xf(B);
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
     int32_t nA = A->nh, nB = B->nh, i, k, ci, d = C->d, rows = 6 * C->nh;
     double tmp[6];

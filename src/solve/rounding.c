@@ -74,7 +74,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
-    const double *FX = t->data + C->W, *bC = t->data + C->bv, *bB = t->data + B->bv;
+    const double *FX = t->data + nd_W(C), *bC = t->data + C->bv, *bB = t->data + B->bv;
     const double fu = RND_SAFETY * RND_U;
     double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
@@ -112,7 +112,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     /* heavy and light parts in one node: the square root of the children's
      * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
     {
-        const double mA = t->data[A->ic], mB = t->data[B->ic];
+        const double mA = t->data[nd_ic(A)], mB = t->data[nd_ic(B)];
         if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
     }
     kappa = maxd(kA, kB) + g;
@@ -162,7 +162,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
-    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U, *ex = t->rnd_x + C->handles;
+    const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
     const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K];
     double sq = 0.0, qe = 0.0;
@@ -197,7 +197,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
         const double fn = n6(f);
-        double ef = RN(t, C)[RND_GAM], sf = n6(t->data + C->gamma), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
+        double ef = RN(t, C)[RND_GAM], sf = n6(t->data + nd_gamma(C)), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
         int32_t ci;
         for (h = 0; h < C->nh; h++) {
             const int32_t o = 6 * h;
@@ -216,7 +216,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         ef += ku * sf;
         for (i = 0, ci = 0; i < A->nh; i++) {
             if (i == C->ka) {
-                const double xk = n6(t->data + A->xf + 6 * i);
+                const double xk = n6(t->data + nd_xf(A) + 6 * i);
                 exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
             } else
                 exA[i] = ex[ci++];

@@ -212,8 +212,8 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
-    const pose *J = t->poses + C->J;
+    const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
+    const pose *J = t->poses + nd_J(C);
     const int32_t *permC = t->tperm + C->handles;
     int counted = jd->type != AQS_JOINT_FREE;
     int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, r, i, c, j;
@@ -288,7 +288,7 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    const double *T = t->tdata + nd->T, *x = t->data + nd->xf;
+    const double *T = t->tdata + nd->T, *x = t->data + nd_xf(nd);
     const int32_t *perm = t->tperm + nd->handles, *pos = row_starts(t, n);
     int32_t cols = 6 * nd->nh + 1, r, p, i, c;
     double sum = 0.0, xs[6 * 8 + 1];

@@ -186,7 +186,7 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
 static void child_frame(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;
-    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + nd_J(C), Pk);
 }
 
 void worldbound_node_update(aqs_linkage *L, int32_t n)
@@ -219,7 +219,7 @@ static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6])
     const tree *t = &L->t;
     const node *nd = &t->nodes[leaf];
     const pose *P = t->poses + nd->poses;
-    const double *x = t->data + nd->xf;
+    const double *x = t->data + nd_xf(nd);
     double f[6], tmp[6];
     int32_t h, i;
     memcpy(f, L->m.comp_force + 6 * nd->comp, sizeof f);
