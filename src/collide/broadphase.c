@@ -372,7 +372,7 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     for (i = 0; i < ns; i++) {
         const shape_def *s = &c->shapes[i];
         if (s->body < 0) c->shape_in[i] = s->local;
-        else pose_compose(&m->body_in_comp[s->body], &s->local, &c->shape_in[i]);
+        else pose_compose(model_body_in_comp(m, s->body), &s->local, &c->shape_in[i]);
     }
     for (n = 0; n < nn; n++) {
         if (L->t.nodes[n].joint < 0) fit_leaf(L, c, n);

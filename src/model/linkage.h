@@ -123,7 +123,9 @@ typedef struct {
 typedef struct {
     int32_t ncomp;          /* composites; index ncomp is the world */
     int32_t *comp_of_body;  /* nbodies */
-    pose *body_in_comp;     /* nbodies: body frame in its composite's frame */
+    pose *body_in_comp;     /* nbodies: body frame in its composite's frame; NULL after
+                               finalize when no body is welded (all identities): read it
+                               with model_body_in_comp */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
     double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
                                finalize (kin_comp_inertia has it, packed) */
@@ -147,6 +149,13 @@ typedef struct {
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
     int32_t nquat;          /* joints with a quaternion (spherical, free) */
 } model;
+
+/* A body's frame in its composite's frame. */
+static inline const pose *model_body_in_comp(const model *m, int32_t body)
+{
+    static const pose identity = {{1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}};
+    return m->body_in_comp ? &m->body_in_comp[body] : &identity;
+}
 
 /* State of the last solve (adaptive back-substitution, MATH.md §6). */
 typedef struct {

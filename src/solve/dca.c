@@ -868,7 +868,7 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         const joint_def *jd = &L->joints[pj];
         double Ib[36], Ic[36], w[6];
         model_body_inertia(L, b, Ib);
-        spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
+        spatial_inertia_to_parent(model_body_in_comp(m, b), Ib, Ic);
         dense_matvec6(Ic, ca, w);
         for (i = 0; i < 6; i++) acc[6 * b + i] += w[i];
         if (L->load_slot[b] >= 0) {
@@ -882,7 +882,7 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         }
         if (jd->type != AQS_JOINT_FIXED) continue;
         /* In b's frame about its origin. */
-        spatial_force_from_parent(&m->body_in_comp[b], acc + 6 * b, L->cforce + 6 * pj);
+        spatial_force_from_parent(model_body_in_comp(m, b), acc + 6 * b, L->cforce + 6 * pj);
         if (jd->parent >= 0)
             for (i = 0; i < 6; i++) acc[6 * jd->parent + i] += acc[6 * b + i];
     }

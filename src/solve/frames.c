@@ -127,14 +127,14 @@ void frames_body_world(aqs_linkage *L, int32_t body, pose *P)
 {
     pose C;
     frames_comp_world(L, L->m.comp_of_body[body], &C);
-    pose_compose(&C, &L->m.body_in_comp[body], P);
+    pose_compose(&C, model_body_in_comp(&L->m, body), P);
 }
 
 void frames_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
                               double f[6])
 {
     const body_load *ld = &L->loads[body];
-    const pose *bc = &L->m.body_in_comp[body];
+    const pose *bc = model_body_in_comp(&L->m, body);
     double r[3], n[3];
     mat3_tvec(comp_world->R, ld->force, f + 3);
     mat3_tvec(comp_world->R, ld->torque, f);
