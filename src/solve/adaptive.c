@@ -22,17 +22,11 @@ aqs_status adaptive_alloc(aqs_linkage *L)
     solve_state *s = &L->s;
     size_t n = (size_t)L->t.nnodes + 1;
     int32_t i;
+    /* The heap, the prediction and the A values: dca_enable, with the DCA
+     * coefficients (an adaptive solve needs those first). */
     s->processed = lk_calloc(L, n, sizeof(int32_t));
     s->reached = lk_calloc(L, (size_t)L->m.ncomp + 2, sizeof(int32_t));
-    s->heap_key = lk_calloc(L, n, sizeof(double));
-    s->heap_item = lk_calloc(L, n, sizeof(int32_t));
-    s->pred = lk_calloc(L, n, 1);
-    s->tstale = lk_calloc(L, n, 1);
-    s->aval = lk_calloc(L, n, sizeof(double));
-    s->plist = lk_calloc(L, n, sizeof(int32_t));
-    if (!s->processed || !s->reached || !s->heap_key || !s->heap_item || !s->pred || !s->tstale ||
-        !s->aval || !s->plist)
-        return AQS_ENOMEM;
+    if (!s->processed || !s->reached) return AQS_ENOMEM;
     s->npred = 0;
     s->margin = AQS_PREDICTION_MARGIN;
     s->counted = 0;

@@ -27,6 +27,19 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     if (!t->rnd_node && !(t->rnd_node = lk_calloc(L, 5 * (size_t)t->nnodes + 1, sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
+    { /* the adaptive solver's per-node arrays (src/solve/adaptive.c), not held by a
+         linkage solved only by the articulated-body algorithm */
+        solve_state *s = &L->s;
+        size_t nn = (size_t)t->nnodes + 1;
+        if (!s->heap_key) s->heap_key = lk_calloc(L, nn, sizeof(double));
+        if (!s->heap_item) s->heap_item = lk_calloc(L, nn, sizeof(int32_t));
+        if (!s->pred) s->pred = lk_calloc(L, nn, 1);
+        if (!s->tstale) s->tstale = lk_calloc(L, nn, 1);
+        if (!s->aval) s->aval = lk_calloc(L, nn, sizeof(double));
+        if (!s->plist) s->plist = lk_calloc(L, nn, sizeof(int32_t));
+        if (!s->heap_key || !s->heap_item || !s->pred || !s->tstale || !s->aval || !s->plist)
+            return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the adaptive solver", fn);
+    }
     if (frames_poses_alloc(L) != AQS_OK || model_inverse_alloc(L) != AQS_OK) /* read below */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
