@@ -761,7 +761,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
             for (i = 0; i < c; i++)
                 for (j = 0; j < c; j++) {
                     double sum = 0;
-                    for (r = 0; r < nd->trows; r++) sum += T[r * c + i] * T[r * c + j];
+                    for (r = 0; r < t->tf[n].trows; r++) sum += T[r * c + i] * T[r * c + j];
                     s->gram[g++] = sum;
                 }
             free(T);

@@ -37,9 +37,7 @@ typedef struct {
                              nd_lam, and for internal nodes nd_W, nd_U, nd_rho, nd_gamma, nd_S */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
     int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
-    int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
-    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
-    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
+    /* the total-acceleration factor's offsets: tree.tf (allocated with the factors) */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
     int32_t forced;       /* the node or a descendant holds a free joint: always computed */
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
@@ -71,6 +69,13 @@ static inline int64_t nd_gamma(const node *n) { return nd_rho(n) + n->d; }
 static inline int64_t nd_S(const node *n) { return nd_gamma(n) + 6; }
 static inline int64_t nd_J(const node *n) { return n->poses + n->nh; }
 
+/* A node's square-root total-acceleration factor (§5, src/solve/totalacc.c). */
+typedef struct {
+    int64_t T;            /* the factor, in tree.tdata */
+    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
+    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
+} tfactor;
+
 typedef struct {
     int32_t nnodes, root;
     node *nodes;
@@ -91,6 +96,7 @@ typedef struct {
                          being updated (6nh x 6), not stored per node */
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
     double *tdata;
+    tfactor *tf;      /* nnodes, with tdata */
     double *tscratch; /* the stacked matrix of one node */
     int32_t *tperm;   /* per node (at its handles offset): T's column blocks as handle
                          indices, in the order the ancestors join them (src/solve/totalacc.c) */
