@@ -22,29 +22,29 @@ typedef struct {
 /* One node of the assembly tree (MATH.md §3.2, §10). Offsets index the
  * pooled arrays of the tree. */
 typedef struct {
-    int32_t a, b, parent; /* children (-1 for leaves), parent (-1 for the root) */
-    int32_t joint;        /* principal joint (effective index); -1 for leaves */
-    int32_t comp;         /* leaves: rigid group (model.ncomp = world); -1 otherwise */
-    int32_t nh;           /* number of handles */
-    int32_t ka, kb;       /* position of the principal joint among A's / B's handles */
-    int32_t height;       /* leaves 0 */
-    int32_t d;            /* dofs of the principal joint */
     int64_t handles;      /* nh effective joint indices, in tree.handles */
     int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses; then
                              (internal nodes) nd_J */
     int64_t bv;           /* b (6nh), in tree.data; then, laid out after it (the offsets are
                              computed by the nd_ functions below, not stored): nd_xf, nd_ic,
                              nd_lam, and for internal nodes nd_W, nd_U, nd_rho, nd_gamma, nd_S */
+    int32_t a, b, parent; /* children (-1 for leaves), parent (-1 for the root) */
+    int32_t joint;        /* principal joint (effective index); -1 for leaves */
+    int32_t comp;         /* leaves: rigid group (model.ncomp = world); -1 otherwise */
+    int32_t nh;           /* number of handles */
+    int32_t ka, kb;       /* position of the principal joint among A's / B's handles */
+    int32_t height;       /* leaves 0 */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
-    int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
-    /* the total-acceleration factor's offsets: tree.tf (allocated with the factors) */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
-    int32_t forced;       /* the node or a descendant holds a free joint: always computed */
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
                              first jw columns (<= rank; 6 when compressed and that handle is
                              the first) */
-    /* The rounding estimate's per-node levels are in tree.rnd_node (allocated with the
-     * DCA coefficients, not held by a linkage solved only exactly). */
+    unsigned char d;      /* dofs of the principal joint (<= 6) */
+    unsigned char grounded; /* holds the world leaf: I^-1 = 0 */
+    unsigned char forced; /* the node or a descendant holds a free joint: always computed */
+    /* The total-acceleration factor's offsets are in tree.tf, the rounding estimate's
+     * per-node levels in tree.rnd_node (both allocated with the DCA coefficients or the
+     * factors, not held by a linkage solved only exactly). */
 } node;
 
 /* A node's pooled arrays after its b (tree.data) and after its handle poses (tree.poses),
@@ -245,8 +245,9 @@ typedef struct {
     aba_joint *joint; /* ne, ABA order */
     aba_node *node;   /* ne, ABA order */
     int32_t *pos_of_comp; /* ncomp: ABA position of each composite */
-    double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
-    double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
+    double *Um;       /* multi-dof joints' U (row j = IA S_j), 6 per dof, at 6 moff[k]; NULL without */
+    double *um;       /* multi-dof joints' u, at moff[k]; NULL without */
+    int32_t *moff;    /* ne: ABA position k's offset in um (multi-dof joints; NULL without) */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
     unsigned char *need; /* ne: the position's world pose was computed for the loads */
     int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */
