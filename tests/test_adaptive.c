@@ -749,7 +749,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
     for (n = 0; n < t->nnodes; n++) {
         const node *nd = &t->nodes[n];
         int64_t h = nd->nh, c = 6 * h + 1, i, j, r;
-        memcpy(s->phi_b + k, t->data + nd->lam, sizeof(double) * (size_t)(36 * h * h));
+        memcpy(s->phi_b + k, t->data + nd_lam(nd), sizeof(double) * (size_t)(36 * h * h));
         k += 36 * h * h;
         memcpy(s->phi_b + k, t->data + nd->bv, sizeof(double) * (size_t)(6 * h));
         k += 6 * h;
@@ -761,7 +761,7 @@ static void take_snapshot(aqs_linkage *L, snapshot *s)
             for (i = 0; i < c; i++)
                 for (j = 0; j < c; j++) {
                     double sum = 0;
-                    for (r = 0; r < nd->trows; r++) sum += T[r * c + i] * T[r * c + j];
+                    for (r = 0; r < t->tf[n].trows; r++) sum += T[r * c + i] * T[r * c + j];
                     s->gram[g++] = sum;
                 }
             free(T);

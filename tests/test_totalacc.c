@@ -81,21 +81,21 @@ static void test_lemma1_square_root_form(void **state)
             if (rel > worst) worst = rel;
             assert_true(rel < 1e-9);
             assert_true(a >= 0.0);
-            assert_true(nd->trows <= cols);
+            assert_true(L->t.tf[n].trows <= cols);
             /* upper triangular with rows missing: row r starts at column
              * pos[r] >= r, strictly increasing, zeros left of it */
             test_unpack_factor(L, n, full);
-            for (r = 0; r < nd->trows; r++) {
-                const int32_t *pos = L->t.trowpos + nd->tpos;
+            for (r = 0; r < L->t.tf[n].trows; r++) {
+                const int32_t *pos = L->t.trowpos + L->t.tf[n].tpos;
                 assert_true(pos[r] >= r && pos[r] < cols && (r == 0 || pos[r] > pos[r - 1]));
                 for (j = 0; j < pos[r]; j++) assert_true(full[(int64_t)r * cols + j] == 0.0);
             }
             /* the packed rows evaluate as the full ones: A = ||T_full z||^2 */
             {
                 const int32_t *perm = L->t.tperm + nd->handles;
-                const double *x = L->t.data + nd->xf;
+                const double *x = L->t.data + nd_xf(nd);
                 double sum = 0;
-                for (r = 0; r < nd->trows; r++) {
+                for (r = 0; r < L->t.tf[n].trows; r++) {
                     double v = full[(int64_t)r * cols + cols - 1];
                     int32_t q, k;
                     for (q = 0; q < nd->nh; q++)

@@ -78,7 +78,7 @@ static int spheres_overlap(const double cx[3], double rx, const double cy[3], do
 static void child_in_node(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;
-    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + nd_J(C), Pk);
 }
 
 /* World pose of node n's child b from n's world pose (cached Pk). */
@@ -352,7 +352,7 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     for (i = 0; i < ns; i++) {
         const shape_def *s = &c->shapes[i];
         if (s->body < 0) c->shape_in[i] = s->local;
-        else pose_compose(&m->body_in_comp[s->body], &s->local, &c->shape_in[i]);
+        else pose_compose(model_body_in_comp(m, s->body), &s->local, &c->shape_in[i]);
     }
     for (n = 0; n < nn; n++) {
         if (L->t.nodes[n].joint < 0) fit_leaf(L, c, n);

@@ -287,6 +287,7 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->poses);
     lk_free(L, t->data);
     lk_free(L, t->rnd_x);
+    lk_free(L, t->rnd_node);
     lk_free(L, t->node_of_eff);
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);
@@ -357,19 +358,10 @@ static void layout(tree *t)
     for (i = 0; i < t->nnodes; i++) {
         node *n = &t->nodes[i];
         int64_t h = n->nh;
-        n->poses = pool_take(&t->nposes, h);
-        n->bv = pool_take(&t->ndata, 6 * h);
-        n->xf = pool_take(&t->ndata, 6 * h);
-        n->ic = pool_take(&t->ndata, 13);
-        n->lam = pool_take(&t->ndata, 36 * h * h);
-        if (n->joint >= 0) {
-            n->J = pool_take(&t->nposes, 1);
-            n->W = pool_take(&t->ndata, 36 * h);
-            n->U = pool_take(&t->ndata, 6 * n->d * h);
-            n->rho = pool_take(&t->ndata, n->d);
-            n->gamma = pool_take(&t->ndata, 6);
-            n->S = pool_take(&t->ndata, 6 * n->d);
-        }
+        n->poses = pool_take(&t->nposes, h + (n->joint >= 0 ? 1 : 0)); /* and nd_J */
+        /* b, then nd_xf, nd_ic, nd_lam and (internal) nd_W, nd_U, nd_rho, nd_gamma, nd_S */
+        n->bv = pool_take(&t->ndata, 12 * h + 13 + 36 * h * h +
+                                         (n->joint >= 0 ? 36 * h + 6 * n->d * h + n->d + 6 + 6 * n->d : 0));
     }
 }
 

@@ -34,8 +34,8 @@ void kin_body_world(const aqs_linkage *L, int32_t body, pose *P)
 {
     const model *m = &L->m;
     int32_t c = m->comp_of_body[body];
-    if (c == m->ncomp) *P = m->body_in_comp[body]; /* welded to the world: its pose there */
-    else pose_compose(&L->aba.node[L->aba.pos_of_comp[c]].v.world, &m->body_in_comp[body], P);
+    if (c == m->ncomp) *P = *model_body_in_comp(m, body); /* welded to the world: its pose there */
+    else pose_compose(&L->aba.node[L->aba.pos_of_comp[c]].v.world, model_body_in_comp(m, body), P);
 }
 
 void kin_comp_world_walk(const aqs_linkage *L, int32_t comp, pose *P)

@@ -22,41 +22,59 @@ typedef struct {
 /* One node of the assembly tree (MATH.md §3.2, §10). Offsets index the
  * pooled arrays of the tree. */
 typedef struct {
+    int64_t handles;      /* nh effective joint indices, in tree.handles */
+    int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses; then
+                             (internal nodes) nd_J */
+    int64_t bv;           /* b (6nh), in tree.data; then, laid out after it (the offsets are
+                             computed by the nd_ functions below, not stored): nd_xf, nd_ic,
+                             nd_lam, and for internal nodes nd_W, nd_U, nd_rho, nd_gamma, nd_S */
     int32_t a, b, parent; /* children (-1 for leaves), parent (-1 for the root) */
     int32_t joint;        /* principal joint (effective index); -1 for leaves */
     int32_t comp;         /* leaves: rigid group (model.ncomp = world); -1 otherwise */
     int32_t nh;           /* number of handles */
     int32_t ka, kb;       /* position of the principal joint among A's / B's handles */
     int32_t height;       /* leaves 0 */
-    int32_t d;            /* dofs of the principal joint */
-    int64_t handles;      /* nh effective joint indices, in tree.handles */
-    int64_t poses;        /* nh handle-frame poses in the node's frame, in tree.poses */
-    int64_t bv, xf;       /* b (6nh), handle forces x (6nh), in tree.data */
-    int64_t J;            /* in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J)) */
-    int64_t W;            /* FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma */
-    int64_t U, rho, gamma, S; /* QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
-                                 S (6 x d); x: the node's handle forces */
-    int64_t ic;           /* mass properties of the subassembly: mass, centre of mass, inertia
-                             about it (13 doubles, node frame; zero when grounded) */
-    int64_t lam;          /* Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
-                             + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi") */
     int32_t rank;         /* columns of Lambda (0 for leaves) */
-    int32_t grounded;     /* holds the world leaf: I^-1 = 0 */
-    int64_t T;            /* square-root total-acceleration factor (§5), in tree.tdata */
-    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
-    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
     int32_t ncount;       /* counted joints inside the node (every one but free joints) */
-    int32_t forced;       /* the node or a descendant holds a free joint: always computed */
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
                              first jw columns (<= rank; 6 when compressed and that handle is
                              the first) */
-    /* Rounding estimate (src/solve/rounding.c, docs/math.md "The rounding term"),
-     * relative error levels in units of u: rk of the node's reduced factors
-     * (U, E, QX, FX), rkb of its b; absolute errors (2-norms) of rho and
-     * gamma; resub the largest rho error in the subtree. (The handle forces'
-     * errors are per handle: tree.rnd_x.) */
-    double rk, rkb, rerho, regam, resub;
+    unsigned char d;      /* dofs of the principal joint (<= 6) */
+    unsigned char grounded; /* holds the world leaf: I^-1 = 0 */
+    unsigned char forced; /* the node or a descendant holds a free joint: always computed */
+    /* The total-acceleration factor's offsets are in tree.tf, the rounding estimate's
+     * per-node levels in tree.rnd_node (both allocated with the DCA coefficients or the
+     * factors, not held by a linkage solved only exactly). */
 } node;
+
+/* A node's pooled arrays after its b (tree.data) and after its handle poses (tree.poses),
+ * in the order src/model/assembly.c's layout takes them:
+ *   xf     handle forces x (6nh)
+ *   ic     mass properties of the subassembly: mass, centre of mass, inertia about it
+ *          (13 doubles, node frame; zero when grounded)
+ *   lam    Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
+ *          + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi")
+ *   W      FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma
+ *   U, rho, gamma, S: QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
+ *          S (6 x d); x: the node's handle forces
+ *   J      in tree.poses: k's child frame in its joint frame (X = spatial_from_parent(J))
+ * (W .. S and J exist for internal nodes only.) */
+static inline int64_t nd_xf(const node *n) { return n->bv + 6 * (int64_t)n->nh; }
+static inline int64_t nd_ic(const node *n) { return n->bv + 12 * (int64_t)n->nh; }
+static inline int64_t nd_lam(const node *n) { return nd_ic(n) + 13; }
+static inline int64_t nd_W(const node *n) { return nd_lam(n) + 36 * (int64_t)n->nh * n->nh; }
+static inline int64_t nd_U(const node *n) { return nd_W(n) + 36 * (int64_t)n->nh; }
+static inline int64_t nd_rho(const node *n) { return nd_U(n) + 6 * (int64_t)n->d * n->nh; }
+static inline int64_t nd_gamma(const node *n) { return nd_rho(n) + n->d; }
+static inline int64_t nd_S(const node *n) { return nd_gamma(n) + 6; }
+static inline int64_t nd_J(const node *n) { return n->poses + n->nh; }
+
+/* A node's square-root total-acceleration factor (§5, src/solve/totalacc.c). */
+typedef struct {
+    int64_t T;            /* the factor, in tree.tdata */
+    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
+    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
+} tfactor;
 
 typedef struct {
     int32_t nnodes, root;
@@ -78,6 +96,7 @@ typedef struct {
                          being updated (6nh x 6), not stored per node */
     /* Total-acceleration factors, allocated when adaptive solving is first used. */
     double *tdata;
+    tfactor *tf;      /* nnodes, with tdata */
     double *tscratch; /* the stacked matrix of one node */
     int32_t *tperm;   /* per node (at its handles offset): T's column blocks as handle
                          indices, in the order the ancestors join them (src/solve/totalacc.c) */
@@ -95,6 +114,11 @@ typedef struct {
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
                           allocated by dca_enable */
+    double *rnd_node;  /* 5 per node, allocated by dca_enable (src/solve/rounding.c, docs/math.md
+                          "The rounding term"): relative error levels in units of u, RND_K of the
+                          node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
+                          (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
+                          error in the subtree */
     int poses_stale; /* the internal nodes' poses (and J) do not follow q: frames_poses
                         recomputes them when the DCA, the adaptive solver, collision or a
                         world-pose query needs them (src/model/stale.c decides) */
@@ -105,7 +129,9 @@ typedef struct {
 typedef struct {
     int32_t ncomp;          /* composites; index ncomp is the world */
     int32_t *comp_of_body;  /* nbodies */
-    pose *body_in_comp;     /* nbodies: body frame in its composite's frame */
+    pose *body_in_comp;     /* nbodies: body frame in its composite's frame; NULL after
+                               finalize when no body is welded (all identities): read it
+                               with model_body_in_comp */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
     double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
                                finalize (kin_comp_inertia has it, packed) */
@@ -129,6 +155,13 @@ typedef struct {
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
     int32_t nquat;          /* joints with a quaternion (spherical, free) */
 } model;
+
+/* A body's frame in its composite's frame. */
+static inline const pose *model_body_in_comp(const model *m, int32_t body)
+{
+    static const pose identity = {{1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}};
+    return m->body_in_comp ? &m->body_in_comp[body] : &identity;
+}
 
 /* State of the last solve (adaptive back-substitution, MATH.md §6). */
 typedef struct {
@@ -212,8 +245,9 @@ typedef struct {
     aba_joint *joint; /* ne, ABA order */
     aba_node *node;   /* ne, ABA order */
     int32_t *pos_of_comp; /* ncomp: ABA position of each composite */
-    double *Um;       /* 6 nv: multi-dof joints' U (row j = IA S_j), at 6 voff; NULL without */
-    double *um;       /* nv: multi-dof joints' u, at voff; NULL without */
+    double *Um;       /* multi-dof joints' U (row j = IA S_j), 6 per dof, at 6 moff[k]; NULL without */
+    double *um;       /* multi-dof joints' u, at moff[k]; NULL without */
+    int32_t *moff;    /* ne: ABA position k's offset in um (multi-dof joints; NULL without) */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
     unsigned char *need; /* ne: the position's world pose was computed for the loads */
     int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */

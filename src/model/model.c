@@ -149,7 +149,7 @@ void model_comp_mass(const aqs_linkage *L, int32_t comp, double *mp)
         one[0] = bd->mass;
         memcpy(one + 1, bd->com, 3 * sizeof(double));
         memcpy(one + 4, bd->inertia, 9 * sizeof(double));
-        model_mass_add_posed(mp, &m->body_in_comp[b], one);
+        model_mass_add_posed(mp, model_body_in_comp(m, b), one);
     }
 }
 
@@ -428,6 +428,10 @@ aqs_status model_build(aqs_linkage *L)
     lk_free(L, first_child);
     lk_free(L, next_sibling);
     lk_free(L, cmass);
+    if (m->nwelded == 0) { /* every body is its composite's root: identity poses, not stored */
+        lk_free(L, m->body_in_comp);
+        m->body_in_comp = NULL;
+    }
     return AQS_OK;
 fail:
     lk_free(L, first_child);

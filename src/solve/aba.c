@@ -114,9 +114,19 @@ aqs_status aba_alloc(aqs_linkage *L)
     lk_free(L, stack);
     if (n != m->ne) return lk_fail(L, AQS_EINVAL, "internal: the articulated-body order holds %d of %d joints",
                                    (int)n, (int)m->ne);
-    if (multi) {
-        a->Um = lk_calloc(L, 6 * (size_t)L->nv + 1, sizeof(double));
-        a->um = lk_calloc(L, (size_t)L->nv + 1, sizeof(double));
+    if (multi) { /* U and u of the multi-dof joints only, at moff of their position */
+        size_t nm = 0;
+        a->moff = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+        if (!a->moff) return AQS_ENOMEM;
+        for (i = 0; i < m->ne; i++) {
+            int d = joint_nv(a->joint[i].type);
+            if (d > 1) {
+                a->moff[i] = (int32_t)nm;
+                nm += (size_t)d;
+            }
+        }
+        a->Um = lk_calloc(L, 6 * nm + 1, sizeof(double));
+        a->um = lk_calloc(L, nm + 1, sizeof(double));
         if (!a->Um || !a->um) return AQS_ENOMEM;
     }
     a->dirty = 1; /* IA and pA set by the first solve */
@@ -131,6 +141,7 @@ void aba_free(aqs_linkage *L)
     lk_free(L, a->pos_of_comp);
     lk_free(L, a->Um);
     lk_free(L, a->um);
+    lk_free(L, a->moff);
     lk_free(L, a->x);
     lk_free(L, a->need);
     lk_free(L, a->path);
@@ -333,7 +344,8 @@ static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node
     const joint_def *jd = &L->joints[jt->joint];
     const double *Q = L->tau + jt->voff;
     double IA[36], S[36], Dinv[36], w[6], F[36], DU[36];
-    double *U = a->Um + 6 * jt->voff, *u = a->um + jt->voff;
+    const int32_t mo = a->moff[jt - a->joint];
+    double *U = a->Um + 6 * mo, *u = a->um + mo;
     int d = joint_nv(jt->type), i, j, r;
     kin_unpack_inertia(nd->IA, IA);
     joint_subspace(jd, L->q + jt->qoff, S);
@@ -466,7 +478,8 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
 {
     const aba_state *a = &L->aba;
     const joint_def *jd = &L->joints[jt->joint];
-    const double *U = a->Um + 6 * jt->voff, *u = a->um + jt->voff;
+    const int32_t mo = a->moff[jt - a->joint];
+    const double *U = a->Um + 6 * mo, *u = a->um + mo;
     double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
     int d = joint_nv(jt->type), i, j;
     joint_subspace(jd, L->q + jt->qoff, S);

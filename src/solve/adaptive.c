@@ -22,17 +22,11 @@ aqs_status adaptive_alloc(aqs_linkage *L)
     solve_state *s = &L->s;
     size_t n = (size_t)L->t.nnodes + 1;
     int32_t i;
+    /* The heap, the prediction and the A values: dca_enable, with the DCA
+     * coefficients (an adaptive solve needs those first). */
     s->processed = lk_calloc(L, n, sizeof(int32_t));
     s->reached = lk_calloc(L, (size_t)L->m.ncomp + 2, sizeof(int32_t));
-    s->heap_key = lk_calloc(L, n, sizeof(double));
-    s->heap_item = lk_calloc(L, n, sizeof(int32_t));
-    s->pred = lk_calloc(L, n, 1);
-    s->tstale = lk_calloc(L, n, 1);
-    s->aval = lk_calloc(L, n, sizeof(double));
-    s->plist = lk_calloc(L, n, sizeof(int32_t));
-    if (!s->processed || !s->reached || !s->heap_key || !s->heap_item || !s->pred || !s->tstale ||
-        !s->aval || !s->plist)
-        return AQS_ENOMEM;
+    if (!s->processed || !s->reached) return AQS_ENOMEM;
     s->npred = 0;
     s->margin = AQS_PREDICTION_MARGIN;
     s->counted = 0;
@@ -124,7 +118,7 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
         const node *c = &L->t.nodes[child[i]];
         if (c->joint >= 0) kids[nk++] = child[i];
         else if (L->m.comp_welded[c->comp]) {
-            dca_welded_forces_comp(L, c->comp, L->t.data + c->xf);
+            dca_welded_forces_comp(L, c->comp, L->t.data + nd_xf(c));
             s->reached[s->nreached++] = c->comp;
         }
     }
@@ -340,7 +334,7 @@ void adaptive_solve(aqs_linkage *L)
     stale_set_refinable(L, 0);
     if (t->nnodes == 0) { /* nothing moves */
         if (L->m.comp_welded[L->m.ncomp])
-            dca_welded_forces_comp(L, L->m.ncomp, L->t.data + t->nodes[t->leaf_of_comp[L->m.ncomp]].xf);
+            dca_welded_forces_comp(L, L->m.ncomp, L->t.data + nd_xf(&t->nodes[t->leaf_of_comp[L->m.ncomp]]));
         finish_exact(L);
         rounding_finish(L);
         return;

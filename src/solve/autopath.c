@@ -142,6 +142,7 @@ static void estimate_from_exact(aqs_linkage *L)
     int sum_based = s->metric == AQS_METRIC_ABS_LINKAGE || s->metric == AQS_METRIC_REL_LINKAGE ||
                     s->joint_bound == AQS_JOINT_BOUND_SUM;
     int32_t n;
+    if (!A) return; /* no DCA coefficients yet (dca_enable): nothing to estimate for */
     for (n = 0; n < t->nnodes; n++) {
         const node *nd = &t->nodes[n];
         const joint_def *jd;

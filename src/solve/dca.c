@@ -25,6 +25,21 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     if (t->data) return AQS_OK;
     if (!t->rnd_x && !(t->rnd_x = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
+    if (!t->rnd_node && !(t->rnd_node = lk_calloc(L, 5 * (size_t)t->nnodes + 1, sizeof(double))))
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
+    { /* the adaptive solver's per-node arrays (src/solve/adaptive.c), not held by a
+         linkage solved only by the articulated-body algorithm */
+        solve_state *s = &L->s;
+        size_t nn = (size_t)t->nnodes + 1;
+        if (!s->heap_key) s->heap_key = lk_calloc(L, nn, sizeof(double));
+        if (!s->heap_item) s->heap_item = lk_calloc(L, nn, sizeof(int32_t));
+        if (!s->pred) s->pred = lk_calloc(L, nn, 1);
+        if (!s->tstale) s->tstale = lk_calloc(L, nn, 1);
+        if (!s->aval) s->aval = lk_calloc(L, nn, sizeof(double));
+        if (!s->plist) s->plist = lk_calloc(L, nn, sizeof(int32_t));
+        if (!s->heap_key || !s->heap_item || !s->pred || !s->tstale || !s->aval || !s->plist)
+            return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the adaptive solver", fn);
+    }
     if (frames_poses_alloc(L) != AQS_OK || model_inverse_alloc(L) != AQS_OK) /* read below */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
     t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
@@ -50,8 +65,8 @@ static void dca_leaf_phi(aqs_linkage *L, int32_t n)
     nd->rank = 0; /* a rigid group: Phi = G I^-1 G^T exactly, no Lambda */
     nd->jw = 0;
     nd->grounded = nd->comp == L->m.ncomp;
-    if (nd->grounded) memset(t->data + nd->ic, 0, 13 * sizeof(double));
-    else model_comp_mass(L, nd->comp, t->data + nd->ic);
+    if (nd->grounded) memset(t->data + nd_ic(nd), 0, 13 * sizeof(double));
+    else model_comp_mass(L, nd->comp, t->data + nd_ic(nd));
 }
 
 void dca_leaf_b(aqs_linkage *L, int32_t n)
@@ -73,7 +88,7 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         double Y[36], w[6];
         /* acc = I^-1 f = Y (Y^T f), through the centre of mass (the square-root
          * form's mass properties); the inverse-inertia form keeps finalize's */
-        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd->ic, Y) != 0) {
+        if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd_ic(nd), Y) != 0) {
             dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, acc, 6, 6);
         } else {
             dense_tmatvec6(Y, f, w);
@@ -390,7 +405,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
-    double *FX = t->data + C->W, *QX = t->data + C->U, *rho = t->data + C->rho, *gamma = t->data + C->gamma;
+    double *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
     double *bC = t->data + C->bv;
     const int32_t c = 6 - d, orows = 6 * C->nh;
     double E[36], U[36], G2[36], Eb[6], gw[6];
@@ -482,10 +497,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
-    const pose *J = t->poses + C->J;
-    const double *IA = t->data + A->ic, *IBb = t->data + B->ic;
-    const double *LA = t->data + A->lam, *LB = t->data + B->lam;
-    double *IC = t->data + C->ic, *LC = t->data + C->lam;
+    const pose *J = t->poses + nd_J(C);
+    const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
+    const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
+    double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
     const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
@@ -731,8 +746,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    const pose *J = t->poses + C->J;
-    double *S = t->data + C->S;
+    const pose *J = t->poses + nd_J(C);
+    double *S = t->data + nd_S(C);
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     double beta[6], bk[6];
     int32_t i;
@@ -751,7 +766,7 @@ void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *ou
 {
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const double *FX = t->data + C->W;
+    const double *FX = t->data + nd_W(C);
     const int32_t rows = 6 * C->nh;
     int32_t i;
     for (i = 0; i < rows; i++)
@@ -765,7 +780,7 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
     const tree *t = &L->t;
     const node *C = &t->nodes[n];
     const int32_t rows = 6 * C->nh;
-    memcpy(out, t->data + C->U + (int64_t)r * rows, sizeof(double) * (size_t)rows);
+    memcpy(out, t->data + nd_U(C) + (int64_t)r * rows, sizeof(double) * (size_t)rows);
 }
 
 void dca_node_backsub(aqs_linkage *L, int32_t n)
@@ -774,10 +789,10 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
     const node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U;
-    const pose *J = (t->poses + C->J);
-    const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
-    double *xA = t->data + A->xf, *xB = t->data + B->xf;
+    const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C);
+    const pose *J = (t->poses + nd_J(C));
+    const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
+    double *xA = t->data + nd_xf(A), *xB = t->data + nd_xf(B);
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
     int32_t nA = A->nh, nB = B->nh, i, k, ci, d = C->d, rows = 6 * C->nh;
     double tmp[6];
@@ -866,7 +881,7 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         const joint_def *jd = &L->joints[pj];
         double Ib[36], Ic[36], w[6];
         model_body_inertia(L, b, Ib);
-        spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
+        spatial_inertia_to_parent(model_body_in_comp(m, b), Ib, Ic);
         dense_matvec6(Ic, ca, w);
         for (i = 0; i < 6; i++) acc[6 * b + i] += w[i];
         if (L->load_slot[b] >= 0) {
@@ -880,7 +895,7 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         }
         if (jd->type != AQS_JOINT_FIXED) continue;
         /* In b's frame about its origin. */
-        spatial_force_from_parent(&m->body_in_comp[b], acc + 6 * b, L->cforce + 6 * pj);
+        spatial_force_from_parent(model_body_in_comp(m, b), acc + 6 * b, L->cforce + 6 * pj);
         if (jd->parent >= 0)
             for (i = 0; i < 6; i++) acc[6 * jd->parent + i] += acc[6 * b + i];
     }

@@ -49,7 +49,7 @@ void dca_phi_leaf(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     node *nd = &t->nodes[n];
-    double *phi = t->data + nd->lam; /* Phi takes Lambda's place */
+    double *phi = t->data + nd_lam(nd); /* Phi takes Lambda's place */
     const pose *P = t->poses + nd->poses;
     int32_t i, j;
     if (nd->comp == L->m.ncomp) {
@@ -119,11 +119,11 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *q = L->q + jd->qoff, *Q = L->tau + jd->voff;
-    const pose *J = t->poses + C->J;
-    double Cf[36], U[36], VS[36], *FX = t->data + C->W, *QX = t->data + C->U;
-    double *rho = t->data + C->rho, *gamma = t->data + C->gamma, *S = t->data + C->S;
-    double *M = t->mscratch, *phi = t->data + C->lam, *bC = t->data + C->bv;
-    const double *phiA = t->data + A->lam, *phiB = t->data + B->lam;
+    const pose *J = t->poses + nd_J(C);
+    double Cf[36], U[36], VS[36], *FX = t->data + nd_W(C), *QX = t->data + nd_U(C);
+    double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C), *S = t->data + nd_S(C);
+    double *M = t->mscratch, *phi = t->data + nd_lam(C), *bC = t->data + C->bv;
+    const double *phiA = t->data + nd_lam(A), *phiB = t->data + nd_lam(B);
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     int32_t nA = A->nh, nB = B->nh, ka = C->ka, kb = C->kb, nh = C->nh, d = C->d;
     int32_t nAo = nA - 1, i, j, ci, cj;

@@ -30,7 +30,7 @@ static void child_frame_in_node(const aqs_linkage *L, const node *C, pose *out)
 {
     const tree *t = &L->t;
     const pose *PA = t->poses + t->nodes[C->a].poses;
-    pose_compose(&PA[C->ka], t->poses + C->J, out);
+    pose_compose(&PA[C->ka], t->poses + nd_J(C), out);
 }
 
 void frames_node(aqs_linkage *L, int32_t n)
@@ -41,7 +41,7 @@ void frames_node(aqs_linkage *L, int32_t n)
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     pose *P = t->poses + C->poses, Pk;
     int32_t i, ci = 0;
-    joint_child_pose(jd, L->q + jd->qoff, t->poses + C->J); /* J(q_k), used by dca.c too */
+    joint_child_pose(jd, L->q + jd->qoff, t->poses + nd_J(C)); /* J(q_k), used by dca.c too */
     child_frame_in_node(L, C, &Pk);
     for (i = 0; i < A->nh; i++)
         if (i != C->ka) P[ci++] = PA[i];
@@ -127,14 +127,14 @@ void frames_body_world(aqs_linkage *L, int32_t body, pose *P)
 {
     pose C;
     frames_comp_world(L, L->m.comp_of_body[body], &C);
-    pose_compose(&C, &L->m.body_in_comp[body], P);
+    pose_compose(&C, model_body_in_comp(&L->m, body), P);
 }
 
 void frames_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
                               double f[6])
 {
     const body_load *ld = &L->loads[body];
-    const pose *bc = &L->m.body_in_comp[body];
+    const pose *bc = model_body_in_comp(&L->m, body);
     double r[3], n[3];
     mat3_tvec(comp_world->R, ld->force, f + 3);
     mat3_tvec(comp_world->R, ld->torque, f);

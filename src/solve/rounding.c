@@ -3,7 +3,7 @@
  *
  * Model: a quantity the DCA computes as a sum carries an error of u times a
  * relative level times the magnitude of its terms. Levels go up the tree with
- * the node update (per node, in node.rk/rkb/rerho/regam/resub):
+ * the node update (per node, in tree.rnd_node: RND_K/KB/RHO/GAM/SUB below):
  *   rk   of the reduced factors (U, E, QX, FX): max over the children +
  *        RND_G0 + the pivot ratio of Lc (the square root of the mobility
  *        across the joint's constrained directions: a near point mass or a
@@ -31,6 +31,10 @@
 
 #include <math.h>
 
+/* A node's levels in tree.rnd_node (5 per node). */
+enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
+#define RN(t, nd) ((t)->rnd_node + 5 * ((nd) - (t)->nodes))
+
 #define RND_G0 2.0
 #define RND_R0 8.0
 
@@ -52,11 +56,11 @@ static double ratio(double terms, double result)
  * errors of a sum of a few terms do not all add up in the same direction). */
 static double carry(double k, double r) { return k * maxd(1.0, r / RND_R0) + RND_G0 * r; }
 
-static void child_levels(const node *c, double *k, double *kb)
+static void child_levels(const tree *t, const node *c, double *k, double *kb)
 {
     if (c->joint >= 0) {
-        *k = c->rk;
-        *kb = c->rkb;
+        *k = RN(t, c)[RND_K];
+        *kb = RN(t, c)[RND_KB];
     } else { /* a leaf: data, and b = I^-1 f rounded a few times */
         *k = 1.0;
         *kb = RND_G0;
@@ -70,13 +74,13 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
-    const double *FX = t->data + C->W, *bC = t->data + C->bv, *bB = t->data + B->bv;
+    const double *FX = t->data + nd_W(C), *bC = t->data + C->bv, *bB = t->data + B->bv;
     const double fu = RND_SAFETY * RND_U;
     double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
 
-    child_levels(A, &kA, &kbA);
-    child_levels(B, &kB, &kbB);
+    child_levels(t, A, &kA, &kbA);
+    child_levels(t, B, &kB, &kbB);
     if (c > 0) {
         double pmax = 0.0, pmin = INFINITY;
         for (i = 0; i < c; i++) {
@@ -108,7 +112,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     /* heavy and light parts in one node: the square root of the children's
      * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
     {
-        const double mA = t->data[A->ic], mB = t->data[B->ic];
+        const double mA = t->data[nd_ic(A)], mB = t->data[nd_ic(B)];
         if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
     }
     kappa = maxd(kA, kB) + g;
@@ -132,15 +136,15 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
         sgam += a * a;
     }
-    C->rerho = fu * kbeta * sqrt(srho);
-    C->regam = fu * kbeta * sqrt(sgam);
-    C->rk = kappa;
-    C->rkb = kb;
+    RN(t, C)[RND_RHO] = fu * kbeta * sqrt(srho);
+    RN(t, C)[RND_GAM] = fu * kbeta * sqrt(sgam);
+    RN(t, C)[RND_K] = kappa;
+    RN(t, C)[RND_KB] = kb;
     {
-        double sub = C->rerho;
-        if (A->joint >= 0) sub = maxd(sub, A->resub);
-        if (B->joint >= 0) sub = maxd(sub, B->resub);
-        C->resub = sub;
+        double sub = RN(t, C)[RND_RHO];
+        if (A->joint >= 0) sub = maxd(sub, RN(t, A)[RND_SUB]);
+        if (B->joint >= 0) sub = maxd(sub, RN(t, B)[RND_SUB]);
+        RN(t, C)[RND_SUB] = sub;
     }
 }
 
@@ -149,7 +153,7 @@ void rounding_solve_start(aqs_linkage *L)
     solve_state *s = &L->s;
     tree *t = &L->t;
     s->rc_sq = s->rc_max = s->rk_max = 0.0;
-    s->rnd_ok = t->rnd_x != NULL; /* allocated by dca_enable with the coefficients */
+    s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
@@ -158,9 +162,9 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
-    const double *x = t->data + C->xf, *FX = t->data + C->W, *QX = t->data + C->U, *ex = t->rnd_x + C->handles;
+    const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
-    const double fu = RND_SAFETY * RND_U, ku = fu * C->rk;
+    const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K];
     double sq = 0.0, qe = 0.0;
     int32_t h, i, k;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
@@ -193,7 +197,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
         const double fn = n6(f);
-        double ef = C->regam, sf = n6(t->data + C->gamma), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
+        double ef = RN(t, C)[RND_GAM], sf = n6(t->data + nd_gamma(C)), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
         int32_t ci;
         for (h = 0; h < C->nh; h++) {
             const int32_t o = 6 * h;
@@ -212,7 +216,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         ef += ku * sf;
         for (i = 0, ci = 0; i < A->nh; i++) {
             if (i == C->ka) {
-                const double xk = n6(t->data + A->xf + 6 * i);
+                const double xk = n6(t->data + nd_xf(A) + 6 * i);
                 exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
             } else
                 exA[i] = ex[ci++];
@@ -222,14 +226,14 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
             else exB[i] = ex[ci++];
         }
     }
-    return C->rerho + qe + ku * sqrt(sq);
+    return RN(t, C)[RND_RHO] + qe + ku * sqrt(sq);
 }
 
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
 {
     solve_state *s = &L->s;
     double e = joint_error(L, n, 1);
-    s->rk_max = maxd(s->rk_max, L->t.nodes[n].rk);
+    s->rk_max = maxd(s->rk_max, RN(&L->t, &L->t.nodes[n])[RND_K]);
     if (counted) {
         s->rc_sq += e * e;
         s->rc_max = maxd(s->rc_max, e);
@@ -253,11 +257,11 @@ void rounding_finish(aqs_linkage *L)
             int32_t n = s->heap_item[i];
             const node *nd = &t->nodes[n];
             /* its own joint from its handle forces, or any rho below it */
-            double e = maxd(joint_error(L, n, 0), nd->resub);
+            double e = maxd(joint_error(L, n, 0), t->rnd_node ? RN(t, nd)[RND_SUB] : 0.0);
             ru_sq += (double)nd->ncount * e * e;
             ru_max = maxd(ru_max, e);
             top = maxd(top, s->heap_key[i]);
-            kmax = maxd(kmax, nd->rk);
+            if (t->rnd_node) kmax = maxd(kmax, RN(t, nd)[RND_K]);
         }
     r2 = sqrt(s->rc_sq + ru_sq);
     rmax = maxd(s->rc_max, ru_max);

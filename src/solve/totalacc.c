@@ -59,18 +59,18 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
     int32_t n;
     double *tdata, *scratch;
     int32_t *perm, *iscratch, *rowpos;
+    tfactor *tf;
     aqs_status st;
     if ((st = dca_enable(L, fn)) != AQS_OK) return st;
     for (n = 0; n < t->nnodes; n++) {
-        node *nd = &t->nodes[n];
+        const node *nd = &t->nodes[n];
         int64_t cols = 6 * (int64_t)nd->nh + 1;
-        nd->T = size;
-        nd->tpos = npos;
         if (nd->joint >= 0) {
             size += cols * (cols + 1) / 2;
             npos += cols;
         }
     }
+    tf = lk_calloc(L, (size_t)t->nnodes + 1, sizeof *tf);
     tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
     /* the reflected rows (column-major, at most 6 + 6 + 6), the node's
      * factor unpacked (cmax x cmax) and one row of M W (cmax) */
@@ -79,7 +79,8 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
     /* posC, mapA, mapB (nh each) and the present rows (cols) */
     iscratch = lk_calloc(L, 3 * (size_t)t->max_handles + (size_t)cmax + 3, sizeof(int32_t));
     rowpos = lk_calloc(L, (size_t)npos + 1, sizeof(int32_t));
-    if (!tdata || !scratch || !perm || !iscratch || !rowpos) {
+    if (!tf || !tdata || !scratch || !perm || !iscratch || !rowpos) {
+        lk_free(L, tf);
         lk_free(L, tdata);
         lk_free(L, scratch);
         lk_free(L, perm);
@@ -89,12 +90,23 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
                        fn, (long long)size);
     }
     t->tdata = tdata;
+    t->tf = tf;
+    for (n = 0, size = npos = 0; n < t->nnodes; n++) {
+        const node *nd = &t->nodes[n];
+        int64_t cols = 6 * (int64_t)nd->nh + 1;
+        tf[n].T = size;
+        tf[n].tpos = npos;
+        if (nd->joint >= 0) {
+            size += cols * (cols + 1) / 2;
+            npos += cols;
+        }
+    }
     t->tscratch = scratch;
     t->tperm = perm;
     t->tiscratch = iscratch;
     t->trowpos = rowpos;
     for (n = 0; n < t->nnodes; n++) {
-        t->nodes[n].trows = 0;
+        t->tf[n].trows = 0;
         order_handles(t, n);
     }
     return AQS_OK;
@@ -103,6 +115,8 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
 void totalacc_free(aqs_linkage *L)
 {
     lk_free(L, L->t.tdata);
+    lk_free(L, L->t.tf);
+    L->t.tf = NULL;
     lk_free(L, L->t.tscratch);
     lk_free(L, L->t.tperm);
     lk_free(L, L->t.tiscratch);
@@ -161,7 +175,7 @@ static void child_map(const tree *t, const node *X, int32_t k, int32_t off, cons
 
 static const int32_t *row_starts(const tree *t, int32_t n)
 {
-    return t->trowpos + t->nodes[n].tpos;
+    return t->trowpos + t->tf[n].tpos;
 }
 
 /* Rows of child x's factor starting in its first block (the joined handle):
@@ -170,7 +184,7 @@ static int32_t reflected_rows(const tree *t, int32_t x)
 {
     const int32_t *pos = row_starts(t, x);
     int32_t r = 0;
-    while (r < t->nodes[x].trows && pos[r] < 6) r++;
+    while (r < t->tf[x].trows && pos[r] < 6) r++;
     return r;
 }
 
@@ -184,8 +198,8 @@ static void place_rows(const tree *t, int32_t x, int32_t from, int64_t off, cons
     const node *X = &t->nodes[x];
     const int32_t *pos = row_starts(t, x);
     int32_t r, cx = 6 * X->nh + 1;
-    for (r = from; r < X->trows; r++) {
-        const double *tr = t->tdata + X->T + off;
+    for (r = from; r < t->tf[X - t->nodes].trows; r++) {
+        const double *tr = t->tdata + t->tf[X - t->nodes].T + off;
         int32_t q = pos[r], j = q < 6 * X->nh ? 6 * map[q / 6] + q % 6 : cols - 1;
         double *last = R + (int64_t)cols * cols - 1;
         if (j == cols - 1 && present[j]) {
@@ -212,27 +226,27 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
-    const double *rho = t->data + C->rho, *gamma = t->data + C->gamma;
-    const pose *J = t->poses + C->J;
+    const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
+    const pose *J = t->poses + nd_J(C);
     const int32_t *permC = t->tperm + C->handles;
     int counted = jd->type != AQS_JOINT_FREE;
     int32_t nh = C->nh, cols = 6 * nh + 1, nAo = A->nh - 1, r, i, c, j;
     int32_t kd = counted ? C->d : 0, da = reflected_rows(t, C->a), db = reflected_rows(t, C->b);
     int32_t p = da + db + kd, row = 0;
     int32_t *posC = t->tiscratch, *mapA = posC + nh, *mapB = mapA + A->nh, *present = mapB + B->nh;
-    int32_t *rowpos = t->trowpos + C->tpos;
+    int32_t *rowpos = t->trowpos + t->tf[C - t->nodes].tpos;
     double *D = t->tscratch; /* the reflected rows, column-major, leading dimension p */
     const int64_t cmax = 6 * (int64_t)t->max_handles + 1;
     double *R = D + 18 * cmax; /* C's factor, unpacked */
     double *mw = R + cmax * cmax; /* M W g, or a row of U M^T (dca.c) */
-    double *T = t->tdata + C->T;
+    double *T = t->tdata + t->tf[C - t->nodes].T;
     const int32_t *posA = row_starts(t, C->a), *posB = row_starts(t, C->b);
     int64_t offA = 0, offB = 0, off;
 
     /* the factor's shape: its rows fit the scratch (at most 6 + 6 + 6 reflected) */
-    AQS_ASSERT(p <= 18 && cols <= cmax && A->trows <= 6 * A->nh + 1 && B->trows <= 6 * B->nh + 1);
-    C->trows = 0;
-    if (A->trows + B->trows + kd == 0) return;
+    AQS_ASSERT(p <= 18 && cols <= cmax && t->tf[A - t->nodes].trows <= 6 * A->nh + 1 && t->tf[B - t->nodes].trows <= 6 * B->nh + 1);
+    t->tf[C - t->nodes].trows = 0;
+    if (t->tf[A - t->nodes].trows + t->tf[B - t->nodes].trows + kd == 0) return;
     for (c = 0; c < nh; c++) posC[permC[c]] = c;
     child_map(t, A, C->ka, 0, posC, mapA);
     child_map(t, B, C->kb, nAo, posC, mapB);
@@ -243,7 +257,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     /* T_A E_A: -(T_A)_k X^T F added to the rows starting in block k (the row
      * g^T = (T_A)_k X^T is X applied to (T_A)_k); the others are copied. */
     for (r = 0; r < da; r++, row++) {
-        const double *tr = t->tdata + A->T + offA;
+        const double *tr = t->tdata + t->tf[A - t->nodes].T + offA;
         double g[6], k[6];
         copy_child_row(tr, posA[r], A->nh, mapA, cols, D + row, p);
         joined_block(tr, posA[r], k);
@@ -254,7 +268,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     }
     /* T_B E_B */
     for (r = 0; r < db; r++, row++) {
-        const double *tr = t->tdata + B->T + offB;
+        const double *tr = t->tdata + t->tf[B - t->nodes].T + offB;
         double k[6];
         copy_child_row(tr, posB[r], B->nh, mapB, cols, D + row, p);
         joined_block(tr, posB[r], k);
@@ -281,14 +295,14 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         rowpos[r++] = j;
     }
     AQS_ASSERT(r <= cols && off <= (int64_t)cols * (cols + 1) / 2); /* packed triangle */
-    C->trows = r;
+    t->tf[C - t->nodes].trows = r;
 }
 
 double totalacc_eval(const aqs_linkage *L, int32_t n)
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    const double *T = t->tdata + nd->T, *x = t->data + nd->xf;
+    const double *T = t->tdata + t->tf[nd - t->nodes].T, *x = t->data + nd_xf(nd);
     const int32_t *perm = t->tperm + nd->handles, *pos = row_starts(t, n);
     int32_t cols = 6 * nd->nh + 1, r, p, i, c;
     double sum = 0.0, xs[6 * 8 + 1];
@@ -297,7 +311,7 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
         for (p = 0; p < nd->nh; p++)
             for (i = 0; i < 6; i++) xs[6 * p + i] = x[6 * perm[p] + i];
         xs[cols - 1] = 1.0;
-        for (r = 0; r < nd->trows; r++) {
+        for (r = 0; r < t->tf[nd - t->nodes].trows; r++) {
             const int32_t c0 = pos[r], len = cols - c0;
             const double *z = xs + c0;
             double s = 0.0;
@@ -307,7 +321,7 @@ double totalacc_eval(const aqs_linkage *L, int32_t n)
         }
         return sum;
     }
-    for (r = 0; r < nd->trows; r++) {
+    for (r = 0; r < t->tf[nd - t->nodes].trows; r++) {
         /* the packed row holds columns pos[r] .. cols - 1: column c at T[c - pos[r]] */
         int32_t c0 = pos[r];
         double s = T[cols - 1 - c0];

@@ -71,9 +71,9 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double p[3];
-        mat3_vec(m->body_in_comp[b].R, L->bodies[b].com, p);
+        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, p);
         for (i = 0; i < 3; i++) {
-            p[i] += m->body_in_comp[b].p[i];
+            p[i] += model_body_in_comp(m, b)->p[i];
             if (p[i] < lo[i]) lo[i] = p[i];
             if (p[i] > hi[i]) hi[i] = p[i];
         }
@@ -84,8 +84,8 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double p[3], d;
-        mat3_vec(m->body_in_comp[b].R, L->bodies[b].com, p);
-        for (i = 0; i < 3; i++) p[i] += m->body_in_comp[b].p[i];
+        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, p);
+        for (i = 0; i < 3; i++) p[i] += model_body_in_comp(m, b)->p[i];
         d = vec3_dist(p, s);
         if (d > r) r = d;
     }
@@ -165,7 +165,7 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
 static void child_frame(const aqs_linkage *L, const node *C, pose *Pk)
 {
     const tree *t = &L->t;
-    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + C->J, Pk);
+    pose_compose(&t->poses[t->nodes[C->a].poses + C->ka], t->poses + nd_J(C), Pk);
 }
 
 void worldbound_node_update(aqs_linkage *L, int32_t n)
@@ -198,7 +198,7 @@ static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6])
     const tree *t = &L->t;
     const node *nd = &t->nodes[leaf];
     const pose *P = t->poses + nd->poses;
-    const double *x = t->data + nd->xf;
+    const double *x = t->data + nd_xf(nd);
     double f[6], tmp[6];
     int32_t h, i;
     memcpy(f, L->m.comp_force + 6 * nd->comp, sizeof f);
@@ -227,10 +227,10 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double r[3], al[3], e;
-        mat3_vec(m->body_in_comp[b].R, L->bodies[b].com, r);
-        r[0] += m->body_in_comp[b].p[0];
-        r[1] += m->body_in_comp[b].p[1];
-        r[2] += m->body_in_comp[b].p[2];
+        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, r);
+        r[0] += model_body_in_comp(m, b)->p[0];
+        r[1] += model_body_in_comp(m, b)->p[1];
+        r[2] += model_body_in_comp(m, b)->p[2];
         vec3_cross(a, r, al);
         al[0] += a[3];
         al[1] += a[4];
