@@ -62,8 +62,8 @@ for c in ${CASES//,/ }; do
     joints=$(sed -n 's/.*: \([0-9]*\) joints, nv.*/\1/p' "$out.log" | head -1)
     ann=$(callgrind_annotate --inclusive=yes "$out" 2>/dev/null)
     # the two functions wrap the 3 timed passes only (not the setup's checks)
-    pin=$(echo "$ann" | grep -m1 ':peer_pin_aba ' | awk '{gsub(",","",$1); print $1}')
-    aqs=$(echo "$ann" | grep -m1 ':bench_exact_pass ' | awk '{gsub(",","",$1); print $1}')
+    pin=$(awk '/:peer_pin_aba / { gsub(",", "", $1); print $1; exit }' <<<"$ann")
+    aqs=$(awk '/:bench_exact_pass / { gsub(",", "", $1); print $1; exit }' <<<"$ann")
     awk -v s="${c%%:*}" -v j="$joints" -v p="$pin" -v a="$aqs" \
         'BEGIN { printf "%-10s %8d %12.0f %12.0f\n", s, j, p / (3 * j), a / (3 * j) }'
 done
