@@ -7,6 +7,7 @@
 #   make demo       the README's "run it" command
 #   make bench      quick benchmark sweep + plots (docs/bench/); FULL=1 the paper's protocol
 #   make bench-scaling  molecule 10k..1M joints (docs/bench/scaling.jsonl)
+#   make bench-peer Pinocchio's ABA against aqs's exact pass, interleaved + callgrind
 #   make bench-hard     hard-case suite, long mode (docs/hardcases.md); check-hard: quick, in check
 #   make install    PREFIX=/usr/local LIBDIR=$(PREFIX)/lib INCLUDEDIR=$(PREFIX)/include DESTDIR=
 #   make uninstall  the same variables: removes what install put there
@@ -102,7 +103,7 @@ BENCH_MAINS += bench/urdf_export.c
 BENCH_SUPPORT := $(filter-out $(BENCH_MAINS),$(sort $(wildcard bench/*.c)))
 
 .PHONY: all lib check check-c check-reference check-python check-install check-symbols check-layers \
-        check-abi abi-baseline deps demo bench bench-scaling bench-plots bench-collide \
+        check-abi abi-baseline deps demo bench bench-peer bench-scaling bench-plots bench-collide \
         check-bench install uninstall clean
 
 all: lib
@@ -301,6 +302,16 @@ peers: $(BUILD)/bench/urdf_export $(SHLIB)
 	@bash tools/deps.sh --peers
 	AQS_LIBRARY=$(abspath $(SHLIB)) PYTHONPATH=$(abspath bindings/python) \
 	    $(PYTHON) bench/peers.py --exporter $(abspath $(BUILD)/bench/urdf_export) $(PEERS_ARGS)
+
+# Pinocchio 4.1's ABA against aqs's exact pass, same models and states, interleaved in
+# one process, plus callgrind instructions per joint (bench/pinpeer_main.cpp,
+# tools/bench_peer.sh; docs/bench.md). Installs Pinocchio's and Boost's headers from PyPI
+# into $(BUILD)/pin; skipped with a message when offline. PEER_ROUNDS, PEER_CASES.
+PEER_ROUNDS ?= 9
+PEER_CASES ?= chain30:30,chain:1000,molecule:5000,molecule:50000,millipede:13000
+.PHONY: bench-peer
+bench-peer: $(INTLIB)
+	@bash tools/bench_peer.sh $(BUILD) $(INTLIB) "$(LDLIBS)" $(PEER_ROUNDS) $(PEER_CASES)
 
 demo: $(BUILD)/bench/demo
 	@$(BUILD)/bench/demo

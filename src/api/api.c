@@ -723,8 +723,10 @@ static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
     L->exact_by_aba = 0;
     L->fb_last = 0;
     if (!fb && autopath_applies(L)) {
-        /* the stale marks of the loads first: the model counts them */
-        update_loads(L);
+        /* the stale marks of the loads first: the model counts them (on a
+         * moved tree only the marks: the chosen path re-expresses the loads) */
+        if (L->t.poses_stale) update_mark_loads(L);
+        else update_loads(L);
         chose = 1;
         auto_exact = autopath_decide(L, stepping);
     }

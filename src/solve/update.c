@@ -61,6 +61,31 @@ void update_loads(aqs_linkage *L)
     stale_loads_fresh(L);
 }
 
+/* The marks update_loads would make, without re-expressing a load: the
+ * parents of the leaves of the formerly and the currently loaded composites.
+ * For the automatic path's decision when the tree's poses are stale (moved
+ * positions): re-expressing through the tree's poses would refresh them
+ * along every loaded body's path (frames_comp_world), work an exact step
+ * does not need (its sweep has the world poses). The loads stay dirty, so
+ * the solve that follows re-expresses them (update_loads again: the same
+ * marks, stopped at the first node already marked). Gravity changes and
+ * contact forces take the full update_loads. */
+void update_mark_loads(aqs_linkage *L)
+{
+    model *m = &L->m;
+    int32_t i, k;
+    if (L->t.nnodes == 0 || !L->loads_dirty || L->gravity_dirty || (L->col && L->col->stiffness > 0.0)) {
+        update_loads(L);
+        return;
+    }
+    for (i = 0; i < m->nloaded_comps; i++)
+        stale_mark(L, L->t.nodes[L->t.leaf_of_comp[m->loaded_comps[i]]].parent);
+    for (k = 0; k < L->nloaded; k++) {
+        int32_t c = m->comp_of_body[L->loaded_bodies[k]];
+        if (c != m->ncomp) stale_mark(L, L->t.nodes[L->t.leaf_of_comp[c]].parent);
+    }
+}
+
 /* Sort node indices ascending (children before parents: a child's index
  * is below its parent's). Insertion sort for short lists; otherwise an LSD
  * radix sort, 8 bits a pass, as many passes as the largest node index
