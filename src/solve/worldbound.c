@@ -16,6 +16,10 @@
 
 #include "dense.h"
 
+/* handles of a node for which the bound beyond held handles is evaluated
+ * (larger nodes fall back to the spheres) */
+#define AQS_WB_MAXH 64
+
 int worldbound_active(const aqs_linkage *L)
 {
     return L->wb != NULL && (L->s.metric == AQS_METRIC_ABS_WORLD || L->s.metric == AQS_METRIC_REL_WORLD);
@@ -30,6 +34,7 @@ void worldbound_free(aqs_linkage *L)
     lk_free(L, w->sa2);
     lk_free(L, w->lmax);
     lk_free(L, w->holds);
+    lk_free(L, w->size);
     lk_free(L, w->wpose);
     lk_free(L, w->ell);
     lk_free(L, w);
@@ -130,9 +135,8 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->holds = lk_calloc(L, nn, 1);
     w->wpose = lk_calloc(L, nn, sizeof(pose));
     w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
-    size = lk_calloc(L, nn, sizeof(int32_t));
+    size = w->size = lk_calloc(L, nn, sizeof(int32_t));
     if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->holds || !w->wpose || !w->ell || !size) {
-        lk_free(L, size);
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -178,7 +182,6 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
             if (leaf <= n - size[n] || leaf > n) w->holds[n] = 1;
         }
     }
-    lk_free(L, size);
     return AQS_OK;
 }
 
@@ -275,23 +278,146 @@ void worldbound_processed(aqs_linkage *L, int32_t n)
     if (L->t.nodes[C->b].joint < 0) leaf_lower(L, C->b);
 }
 
+/* Handle i's acceleration (minus g, in the handle's frame) less the
+ * subassembly's common rigid motion G_i I^-1 G^T x, which is the same rigid
+ * motion at every handle and cancels from the relative accelerations
+ * (square-root form: Lambda_i (Lambda^T x) + b_i; the inverse-inertia form
+ * keeps it: Phi_i x + b_i). mag: a sum of absolute values of the terms (a
+ * scale for the rounding). lw, lwa: Lambda^T x and |Lambda|^T |x|. */
+static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const double *lwa, int32_t i,
+                       double out[6], double *mag)
+{
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    const double *b = t->data + nd->bv + 6 * i, *x = t->data + nd->xf;
+    const int32_t rows = 6 * nd->nh;
+    int32_t r, k;
+    for (r = 0; r < 6; r++) {
+        double s = b[r], m = fabs(b[r]);
+        if (L->dca_form == AQS_DCA_FORM_PHI) {
+            int32_t j;
+            for (j = 0; j < nd->nh; j++) {
+                const double *blk = t->data + nd->lam + 36 * ((int64_t)nd->nh * i + j) + 6 * r;
+                for (k = 0; k < 6; k++) {
+                    s += blk[k] * x[6 * j + k];
+                    m += fabs(blk[k] * x[6 * j + k]);
+                }
+            }
+        } else {
+            const double *lr = t->data + nd->lam + (int64_t)(6 * i + r) * rows;
+            for (k = 0; k < nd->rank; k++) {
+                s += lr[k] * lw[k];
+                m += fabs(lr[k]) * lwa[k];
+            }
+        }
+        out[r] = s;
+        *mag += m;
+    }
+}
+
+/* Handle i's acceleration (as handle_acc) in the world: angular, and the
+ * linear one of the point c (world). */
+static void handle_world(const aqs_linkage *L, int32_t n, const double a[6], int32_t i, const double c[3],
+                         double al[3], double lin[3])
+{
+    const pose *P = L->t.poses + L->t.nodes[n].poses + i, *Wn = &L->wb->wpose[n];
+    pose H;
+    double l[3], d[3], cr[3];
+    pose_compose(Wn, P, &H);
+    mat3_vec(H.R, a, al);
+    mat3_vec(H.R, a + 3, l);
+    d[0] = c[0] - H.p[0];
+    d[1] = c[1] - H.p[1];
+    d[2] = c[2] - H.p[2];
+    vec3_cross(al, d, cr);
+    lin[0] = l[0] + cr[0];
+    lin[1] = l[1] + cr[1];
+    lin[2] = l[2] + cr[2];
+}
+
+/* The bound on the error node n's joints cause in the bodies beyond its
+ * held handles (docs/math.md §10b, "Beyond a held handle"): for held
+ * handle h, those joints move everything beyond h rigidly with
+ * D_h = a_h - a_e, h's acceleration relative to the composite n hangs from
+ * (entry handle e; the world for a grounded node), both exact at n's handle
+ * forces. For b beyond h: |D_lin(p_b)| + ell_b |D_ang| <= |D_lin(c_0)| +
+ * |D_ang| (R_0 + ellmax), c_0, R_0 the root's sphere. -1 if n has no entry
+ * (the caller falls back to the spheres). */
+static double beyond_bound(const aqs_linkage *L, int32_t n)
+{
+    const struct worldbound *w = L->wb;
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    const double *s0 = w->sph + 4 * t->root, *x = t->data + nd->xf;
+    const int32_t rows = 6 * nd->nh;
+    double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH];
+    double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
+    int32_t i, k, r, entry = -1;
+    if (nd->nh > AQS_WB_MAXH) return -1.0;
+    for (i = 0; i < nd->nh; i++) {
+        int32_t e = t->handles[nd->handles + i];
+        int32_t leaf = t->leaf_of_comp[L->m.eff_child[e]];
+        if (leaf > n - w->size[n] && leaf <= n) entry = i;
+    }
+    if (entry < 0 && !nd->grounded) return -1.0;
+    if (L->dca_form != AQS_DCA_FORM_PHI) {
+        for (k = 0; k < nd->rank; k++) lw[k] = lwa[k] = 0.0;
+        for (r = 0; r < rows; r++) {
+            const double *lr = t->data + nd->lam + (int64_t)r * rows;
+            for (k = 0; k < nd->rank; k++) {
+                lw[k] += lr[k] * x[r];
+                lwa[k] += fabs(lr[k] * x[r]);
+            }
+        }
+    }
+    if (entry >= 0) {
+        handle_acc(L, n, lw, lwa, entry, ae, &mag);
+        handle_world(L, n, ae, entry, s0, ale, line);
+    } else { /* the world: -g everywhere (root trick), no rotation */
+        ale[0] = ale[1] = ale[2] = 0.0;
+        for (k = 0; k < 3; k++) line[k] = -L->gravity[k];
+        mag += sqrt(vec3_dot(line, line));
+    }
+    for (i = 0; i < nd->nh; i++) {
+        double ah[6], al[3], lin[3], m = mag, v;
+        if (i == entry) continue;
+        handle_acc(L, n, lw, lwa, i, ah, &m);
+        handle_world(L, n, ah, i, s0, al, lin);
+        for (k = 0; k < 3; k++) {
+            al[k] -= ale[k];
+            lin[k] -= line[k];
+        }
+        /* rounding: the DCA's relative accuracy times the terms' scale, at
+         * the lever arm of the whole linkage for the angular part */
+        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (1.0 + R0);
+        if (v > best) best = v;
+    }
+    return best;
+}
+
 double worldbound_key(const aqs_linkage *L, int32_t n, double a)
 {
     const struct worldbound *w = L->wb;
     const double *s = w->sph + 4 * n;
-    double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n];
+    double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n], e;
     if (a <= 0.0) return 0.0;
+    /* the bodies inside n: lever arms within n's sphere */
+    e = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
     if (w->holds[n]) {
-        /* bodies beyond n's held handles: anywhere in the root's sphere */
-        const double *s0 = w->sph + 4 * L->t.root;
-        const pose *P = &w->wpose[n];
-        double c[3], far;
-        mat3_vec(P->R, s, c);
-        c[0] += P->p[0];
-        c[1] += P->p[1];
-        c[2] += P->p[2];
-        far = R + dist3(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
-        if (far > rho) rho = far;
+        double far = beyond_bound(L, n);
+        if (far < 0.0) {
+            /* bodies beyond n's held handles: anywhere in the root's sphere */
+            const double *s0 = w->sph + 4 * L->t.root;
+            const pose *P = &w->wpose[n];
+            double c[3];
+            mat3_vec(P->R, s, c);
+            c[0] += P->p[0];
+            c[1] += P->p[1];
+            c[2] += P->p[2];
+            rho = R + dist3(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
+            far = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
+        }
+        if (far > e) e = far;
     }
-    return sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n])) * (1.0 + 1e-12);
+    return e * (1.0 + 1e-12);
 }

@@ -15,6 +15,8 @@ struct worldbound {
     double *sl2, *sa2;    /* per node: sum over the counted joints inside of sigma_lin^2, sigma_ang^2 */
     double *lmax;         /* per node: largest length scale ell_b of a body inside (static) */
     unsigned char *holds; /* per node: it holds up a joint whose child side is outside it */
+    int32_t *size;        /* per node: nodes in its subtree, itself included (the subtree
+                             is the index range (n - size, n]) */
     pose *wpose;          /* per node: world pose of its frame (root: identity), set when
                              its parent is processed (valid for processed and queued nodes) */
     double *ell;          /* per body: ell_b = sqrt(tr(I_com) / (2 m)) (0 if m <= 0) */
