@@ -33,6 +33,8 @@ void worldbound_free(aqs_linkage *L)
     lk_free(L, w->sl2);
     lk_free(L, w->sa2);
     lk_free(L, w->lmax);
+    lk_free(L, w->hl2);
+    lk_free(L, w->ha2);
     lk_free(L, w->holds);
     lk_free(L, w->size);
     lk_free(L, w->wpose);
@@ -132,11 +134,13 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->sl2 = lk_calloc(L, nn, sizeof(double));
     w->sa2 = lk_calloc(L, nn, sizeof(double));
     w->lmax = lk_calloc(L, nn, sizeof(double));
+    w->hl2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
+    w->ha2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
     w->holds = lk_calloc(L, nn, 1);
     w->wpose = lk_calloc(L, nn, sizeof(pose));
     w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
     size = w->size = lk_calloc(L, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->holds || !w->wpose || !w->ell || !size) {
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -156,18 +160,37 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
         size[n] += size[nd->a] + size[nd->b];
         w->sph[4 * n + 3] = -1.0; /* computed by the update (the caller marks every node) */
         w->lmax[n] = fmax(w->lmax[nd->a], w->lmax[nd->b]);
-        w->sl2[n] = w->sl2[nd->a] + w->sl2[nd->b];
-        w->sa2[n] = w->sa2[nd->a] + w->sa2[nd->b];
         {
             const joint_def *jd = &L->joints[L->m.eff_joint[nd->joint]];
+            double sl = 0.0, sa = 0.0;
+            /* P: the side holding k (it holds n's entry or the world), Q: the side hanging from k */
+            int32_t kleaf = t->leaf_of_comp[L->m.eff_child[nd->joint]];
+            int32_t inA = kleaf > nd->a - size[nd->a] && kleaf <= nd->a;
+            int32_t P = inA ? nd->b : nd->a, Q = inA ? nd->a : nd->b, kP = inA ? nd->kb : nd->ka;
+            int32_t ci = 0, side;
+            double bl, ba;
             if (jd->type != AQS_JOINT_FREE) {
-                double S[36] = {0}, sl, sa;
+                double S[36] = {0};
                 int d = joint_nv(jd->type);
                 joint_subspace(jd, L->q + jd->qoff, S);
                 sa = sigma_rows(S, d, 0);
                 sl = sigma_rows(S, d, 3);
-                w->sl2[n] += sl * sl;
-                w->sa2[n] += sa * sa;
+            }
+            /* the paths into Q: P's path to k, k, then Q's paths */
+            bl = w->hl2[t->nodes[P].handles + kP] + sl * sl;
+            ba = w->ha2[t->nodes[P].handles + kP] + sa * sa;
+            w->sl2[n] = fmax(w->sl2[P], bl + w->sl2[Q]);
+            w->sa2[n] = fmax(w->sa2[P], ba + w->sa2[Q]);
+            /* n's handles, in the order [A-outer; B-outer] */
+            for (side = 0; side < 2; side++) {
+                int32_t c = side == 0 ? nd->a : nd->b, kc = side == 0 ? nd->ka : nd->kb;
+                const node *cn = &t->nodes[c];
+                for (h = 0; h < cn->nh; h++) {
+                    if (h == kc) continue;
+                    w->hl2[nd->handles + ci] = w->hl2[cn->handles + h] + (c == Q ? bl : 0.0);
+                    w->ha2[nd->handles + ci] = w->ha2[cn->handles + h] + (c == Q ? ba : 0.0);
+                    ci++;
+                }
             }
         }
     }
