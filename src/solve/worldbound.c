@@ -1,14 +1,17 @@
 /* worldbound.c -- the bound of the world-space error measures (docs/math.md
  * §10b). For body b (centre of mass p_b, length scale ell_b) the measure is
  * e_b = |delta a_lin(b)| + ell_b |delta alpha(b)|, the error caused by the
- * joints a solve did not compute. Joint j (motion subspace S_j at its child
- * frame origin o_j) moves b's centre of mass by S_lin qdd + S_ang qdd x
- * (p_b - o_j), so for a queued node n (all its joints uncomputed)
- *   contribution_n(b) <= sum_{j in n} |qdd_j| (sigma_lin_j + sigma_ang_j rho_n)
- *                     <= sqrt(A(n)) (sqrt(SL_n) + rho_n sqrt(SA_n)) = E_n
- * (Cauchy-Schwarz, then Minkowski), with rho_n >= |p_b - o_j| + ell_b over
- * the bodies b the joints of n move: from n's sphere when they all lie in n,
- * else from n's and the root's spheres. max_b e_b <= sum_{queued} E_n. */
+ * joints a solve did not compute. Per queued node n (all its joints
+ * uncomputed) a body is inside n, beyond exactly one handle n holds up, or
+ * not moved by n's joints, so n's part is at most E_n = max(E_in, E_h):
+ *   inside:  sum_{j on b's path in n} |qdd_j| (sigma_lin_j + rho_n sigma_ang_j)
+ *            <= sqrt(A(n)) (sqrt(PL_n) + rho_n sqrt(PA_n))   (Cauchy-Schwarz on
+ *            the path, Minkowski; PL, PA: the largest path sums of sigma^2,
+ *            rho_n from n's sphere);
+ *   beyond held handle h: the rigid motion D_h = a_h - a_entry, exact from
+ *            n's coefficients at its handle forces, at the root sphere's
+ *            radius: |D_lin(c_0)| + |D_ang| (R_0 + ellmax).
+ * max_b e_b <= sum_{queued} E_n. */
 #include "worldbound.h"
 
 #include <math.h>
