@@ -12,7 +12,8 @@ DIR/<set>-chain30-tip.csv and DIR/scaling.jsonl (whichever exist) and writes PNG
   scaling.png                   molecule 10k..1M joints, log-log
   world-measures.png            speedup and N_E against the final relative displacement error,
                                 joint and world measures side by side (DIR/world-*.jsonl,
-                                aqs-bench --metric rel_joint,rel_world; issue 16)
+                                aqs-bench --metric rel_joint,rel_world; issue 16); an earlier
+                                run's rel_world in the same file dashed (N_E only)
 Within a file only the lines of its latest run_id are used (scaling.jsonl: the latest line
 of each size). --tables prints the results as Markdown tables instead.
 """
@@ -119,24 +120,40 @@ def displacement(sets, out):
 
 def world_measures(d, out):
     """Speedup over the exact step and N_E against the final displacement error, one panel
-    pair per scene and N_f, a curve per measure (the paper's Figure 8 axis)."""
+    pair per scene and N_f, a curve per measure (the paper's Figure 8 axis). The latest run
+    of each file is drawn solid; an earlier run's rel_world (the bound before it changed),
+    dashed, when the file holds one with the same N_f."""
     panels = []
     for scene in ("molecule", "chain30", "millipede"):
-        rows = load_jsonl(os.path.join(d, f"world-{scene}.jsonl"))
+        path = os.path.join(d, f"world-{scene}.jsonl")
+        rows = load_jsonl(path)
+        allrows = load_jsonl(path, latest_run=False)
+        runs = []
+        for r in allrows:
+            if r["run_id"] not in runs:
+                runs.append(r["run_id"])
+        before = [r for r in allrows if len(runs) > 1 and r["run_id"] == runs[-2] and r["metric"] == "rel_world"]
         for nf, g in by_forces(rows).items():
-            panels.append((f"{scene}, N_f = {nf}, {g[0]['steps']} steps", g))
+            old = [r for r in before if r["forces"] == nf]
+            panels.append((f"{scene}, N_f = {nf}, {g[0]['steps']} steps", g, old))
     if not panels:
         return False
     fig, axes = plt.subplots(2, len(panels), figsize=(3.6 * len(panels), 6.2), squeeze=False)
-    for k, (title, g) in enumerate(panels):
-        for metric, style in (("rel_joint", "o-"), ("rel_world", "s-")):
+    for k, (title, g, old) in enumerate(panels):
+        for metric, style, rows, label in (("rel_joint", "o-", g, "rel_joint"),
+                                           ("rel_world", "s-", g, "rel_world"),
+                                           ("rel_world", "x--", old,
+                                            f"rel_world before ({old[0]['steps'] if old else 0} steps)")):
             pts = sorted((r["displacement_error"], r["speedup"], r["computed_joints"])
-                         for r in g if r["metric"] == metric and r["displacement_error"] > 0)
+                         for r in rows if r["metric"] == metric and r["displacement_error"] > 0)
             if not pts:
                 continue
             e, sp, ne = zip(*pts)
-            axes[0][k].loglog(e, sp, style, ms=3, label=metric)
-            axes[1][k].semilogx(e, ne, style, ms=3, label=metric)
+            if rows is old:
+                axes[1][k].semilogx(e, ne, style, ms=3, alpha=0.6, label=label)  # speedups: other loads
+                continue
+            axes[0][k].loglog(e, sp, style, ms=3, label=label)
+            axes[1][k].semilogx(e, ne, style, ms=3, label=label)
         axes[0][k].set_title(title, fontsize=9)
         axes[0][k].set_ylabel("speedup over the exact step")
         axes[1][k].set_ylabel("N_E (joints computed)")

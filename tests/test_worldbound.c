@@ -652,6 +652,80 @@ static void test_spheres_lazy(void **state)
     assert_true(checked > 1000);
 }
 
+/* ------------------------------------------------------------ path sums */
+
+/* sigma^2 of a joint type's angular (ang = 1) or linear block: every joint
+ * type's columns are orthonormal, so each block's largest singular value is
+ * 1 where the block is not zero. */
+static double sigma2_of(int32_t type, int ang)
+{
+    switch (type) {
+    case AQS_JOINT_REVOLUTE:
+    case AQS_JOINT_SPHERICAL:
+    case AQS_JOINT_UNIVERSAL: return ang ? 1.0 : 0.0;
+    case AQS_JOINT_PRISMATIC: return ang ? 0.0 : 1.0;
+    case AQS_JOINT_CYLINDRICAL:
+    case AQS_JOINT_PLANAR: return 1.0;
+    default: return 0.0; /* free: not counted */
+    }
+}
+
+/* The interior bound's path sums (docs/math.md §10b): for every node n,
+ * sa2[n] (sl2[n]) is the largest sum of sigma_ang^2 (sigma_lin^2) over the
+ * joints of n on the path from the world to one composite of n, found here
+ * by walking every composite's path to the world. */
+static void test_path_sums(void **state)
+{
+    uint64_t rng = 777;
+    int c;
+    long checked = 0;
+    (void)state;
+    for (c = 0; c < 12; c++) {
+        spec sp = {20 + 25 * c, c % 3 == 0, 1, 2, 0, c % 4 == 1, 3.0, 0.8};
+        aqs_linkage *L = random_linkage(&rng, &sp);
+        const model *m;
+        const tree *t;
+        int32_t *parent_eff, *first, n, e, k;
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, 1e-3), AQS_OK);
+        m = &L->m;
+        t = &L->t;
+        parent_eff = malloc(sizeof(int32_t) * (size_t)(m->ncomp + 1));
+        first = malloc(sizeof(int32_t) * (size_t)t->nnodes);
+        for (k = 0; k <= m->ncomp; k++) parent_eff[k] = -1;
+        for (e = 0; e < m->ne; e++) parent_eff[m->eff_child[e]] = e;
+        /* the lowest node index in n's subtree (post-order: the first leaf below) */
+        for (n = 0; n < t->nnodes; n++)
+            first[n] = t->nodes[n].joint < 0 ? n : first[t->nodes[n].a] < first[t->nodes[n].b] ? first[t->nodes[n].a]
+                                                                                                 : first[t->nodes[n].b];
+        for (n = 0; n < t->nnodes; n++) {
+            double best[2] = {0, 0};
+            int ang;
+            if (t->nodes[n].joint < 0) continue;
+            for (k = 0; k < m->ncomp; k++) {
+                int32_t leaf = t->leaf_of_comp[k], cc = k;
+                double sum[2] = {0, 0};
+                if (leaf < first[n] || leaf > n) continue;
+                while (parent_eff[cc] >= 0) {
+                    int32_t pe = parent_eff[cc], nd = t->node_of_eff[pe];
+                    if (nd >= first[n] && nd <= n)
+                        for (ang = 0; ang < 2; ang++)
+                            sum[ang] += sigma2_of(L->joints[m->eff_joint[pe]].type, ang);
+                    cc = m->eff_parent[pe];
+                }
+                for (ang = 0; ang < 2; ang++) best[ang] = fmax(best[ang], sum[ang]);
+            }
+            assert_true(fabs(L->wb->sa2[n] - best[1]) <= 1e-9 * (1 + best[1]));
+            assert_true(fabs(L->wb->sl2[n] - best[0]) <= 1e-9 * (1 + best[0]));
+            checked++;
+        }
+        free(parent_eff);
+        free(first);
+        aqs_linkage_destroy(L);
+    }
+    print_message("path sums: %ld nodes checked\n", checked);
+    assert_true(checked > 1000);
+}
+
 /* ------------------------------------------------------------ API */
 
 static void test_api(void **state)
@@ -747,7 +821,8 @@ int main(void)
         cmocka_unit_test(test_body_accel_fd),   cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_bound_hard),      cmocka_unit_test(test_bound_trajectories),
         cmocka_unit_test(test_bound_scenes),
-        cmocka_unit_test(test_spheres_lazy),    cmocka_unit_test(test_api),
+        cmocka_unit_test(test_spheres_lazy),    cmocka_unit_test(test_path_sums),
+        cmocka_unit_test(test_api),
         cmocka_unit_test(test_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,20 +1,27 @@
 /* worldbound.c -- the bound of the world-space error measures (docs/math.md
  * §10b). For body b (centre of mass p_b, length scale ell_b) the measure is
  * e_b = |delta a_lin(b)| + ell_b |delta alpha(b)|, the error caused by the
- * joints a solve did not compute. Joint j (motion subspace S_j at its child
- * frame origin o_j) moves b's centre of mass by S_lin qdd + S_ang qdd x
- * (p_b - o_j), so for a queued node n (all its joints uncomputed)
- *   contribution_n(b) <= sum_{j in n} |qdd_j| (sigma_lin_j + sigma_ang_j rho_n)
- *                     <= sqrt(A(n)) (sqrt(SL_n) + rho_n sqrt(SA_n)) = E_n
- * (Cauchy-Schwarz, then Minkowski), with rho_n >= |p_b - o_j| + ell_b over
- * the bodies b the joints of n move: from n's sphere when they all lie in n,
- * else from n's and the root's spheres. max_b e_b <= sum_{queued} E_n. */
+ * joints a solve did not compute. Per queued node n (all its joints
+ * uncomputed) a body is inside n, beyond exactly one handle n holds up, or
+ * not moved by n's joints, so n's part is at most E_n = max(E_in, E_h):
+ *   inside:  sum_{j on b's path in n} |qdd_j| (sigma_lin_j + rho_n sigma_ang_j)
+ *            <= sqrt(A(n)) (sqrt(PL_n) + rho_n sqrt(PA_n))   (Cauchy-Schwarz on
+ *            the path, Minkowski; PL, PA: the largest path sums of sigma^2,
+ *            rho_n from n's sphere);
+ *   beyond held handle h: the rigid motion D_h = a_h - a_entry, exact from
+ *            n's coefficients at its handle forces, at the root sphere's
+ *            radius: |D_lin(c_0)| + |D_ang| (R_0 + ellmax).
+ * max_b e_b <= sum_{queued} E_n. */
 #include "worldbound.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "dense.h"
+
+/* handles of a node for which the bound beyond held handles is evaluated
+ * (larger nodes fall back to the spheres) */
+#define AQS_WB_MAXH 64
 
 int worldbound_active(const aqs_linkage *L)
 {
@@ -29,7 +36,10 @@ void worldbound_free(aqs_linkage *L)
     lk_free(L, w->sl2);
     lk_free(L, w->sa2);
     lk_free(L, w->lmax);
+    lk_free(L, w->hl2);
+    lk_free(L, w->ha2);
     lk_free(L, w->holds);
+    lk_free(L, w->size);
     lk_free(L, w->wpose);
     lk_free(L, w->ell);
     lk_free(L, w);
@@ -106,12 +116,13 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->sl2 = lk_calloc(L, nn, sizeof(double));
     w->sa2 = lk_calloc(L, nn, sizeof(double));
     w->lmax = lk_calloc(L, nn, sizeof(double));
+    w->hl2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
+    w->ha2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
     w->holds = lk_calloc(L, nn, 1);
     w->wpose = lk_calloc(L, nn, sizeof(pose));
     w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
-    size = lk_calloc(L, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->holds || !w->wpose || !w->ell || !size) {
-        lk_free(L, size);
+    size = w->size = lk_calloc(L, nn, sizeof(int32_t));
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -131,18 +142,37 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
         size[n] += size[nd->a] + size[nd->b];
         w->sph[4 * n + 3] = -1.0; /* computed by the update (the caller marks every node) */
         w->lmax[n] = fmax(w->lmax[nd->a], w->lmax[nd->b]);
-        w->sl2[n] = w->sl2[nd->a] + w->sl2[nd->b];
-        w->sa2[n] = w->sa2[nd->a] + w->sa2[nd->b];
         {
             const joint_def *jd = &L->joints[L->m.eff_joint[nd->joint]];
+            double sl = 0.0, sa = 0.0;
+            /* P: the side holding k (it holds n's entry or the world), Q: the side hanging from k */
+            int32_t kleaf = t->leaf_of_comp[L->m.eff_child[nd->joint]];
+            int32_t inA = kleaf > nd->a - size[nd->a] && kleaf <= nd->a;
+            int32_t P = inA ? nd->b : nd->a, Q = inA ? nd->a : nd->b, kP = inA ? nd->kb : nd->ka;
+            int32_t ci = 0, side;
+            double bl, ba;
             if (jd->type != AQS_JOINT_FREE) {
-                double S[36] = {0}, sl, sa;
+                double S[36] = {0};
                 int d = joint_nv(jd->type);
                 joint_subspace(jd, L->q + jd->qoff, S);
                 sa = sigma_rows(S, d, 0);
                 sl = sigma_rows(S, d, 3);
-                w->sl2[n] += sl * sl;
-                w->sa2[n] += sa * sa;
+            }
+            /* the paths into Q: P's path to k, k, then Q's paths */
+            bl = w->hl2[t->nodes[P].handles + kP] + sl * sl;
+            ba = w->ha2[t->nodes[P].handles + kP] + sa * sa;
+            w->sl2[n] = fmax(w->sl2[P], bl + w->sl2[Q]);
+            w->sa2[n] = fmax(w->sa2[P], ba + w->sa2[Q]);
+            /* n's handles, in the order [A-outer; B-outer] */
+            for (side = 0; side < 2; side++) {
+                int32_t c = side == 0 ? nd->a : nd->b, kc = side == 0 ? nd->ka : nd->kb;
+                const node *cn = &t->nodes[c];
+                for (h = 0; h < cn->nh; h++) {
+                    if (h == kc) continue;
+                    w->hl2[nd->handles + ci] = w->hl2[cn->handles + h] + (c == Q ? bl : 0.0);
+                    w->ha2[nd->handles + ci] = w->ha2[cn->handles + h] + (c == Q ? ba : 0.0);
+                    ci++;
+                }
             }
         }
     }
@@ -157,7 +187,6 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
             if (leaf <= n - size[n] || leaf > n) w->holds[n] = 1;
         }
     }
-    lk_free(L, size);
     return AQS_OK;
 }
 
@@ -254,23 +283,146 @@ void worldbound_processed(aqs_linkage *L, int32_t n)
     if (L->t.nodes[C->b].joint < 0) leaf_lower(L, C->b);
 }
 
+/* Handle i's acceleration (minus g, in the handle's frame) less the
+ * subassembly's common rigid motion G_i I^-1 G^T x, which is the same rigid
+ * motion at every handle and cancels from the relative accelerations
+ * (square-root form: Lambda_i (Lambda^T x) + b_i; the inverse-inertia form
+ * keeps it: Phi_i x + b_i). mag: a sum of absolute values of the terms (a
+ * scale for the rounding). lw, lwa: Lambda^T x and |Lambda|^T |x|. */
+static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const double *lwa, int32_t i,
+                       double out[6], double *mag)
+{
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    const double *b = t->data + nd->bv + 6 * i, *x = t->data + nd->xf;
+    const int32_t rows = 6 * nd->nh;
+    int32_t r, k;
+    for (r = 0; r < 6; r++) {
+        double s = b[r], m = fabs(b[r]);
+        if (L->dca_form == AQS_DCA_FORM_PHI) {
+            int32_t j;
+            for (j = 0; j < nd->nh; j++) {
+                const double *blk = t->data + nd->lam + 36 * ((int64_t)nd->nh * i + j) + 6 * r;
+                for (k = 0; k < 6; k++) {
+                    s += blk[k] * x[6 * j + k];
+                    m += fabs(blk[k] * x[6 * j + k]);
+                }
+            }
+        } else {
+            const double *lr = t->data + nd->lam + (int64_t)(6 * i + r) * rows;
+            for (k = 0; k < nd->rank; k++) {
+                s += lr[k] * lw[k];
+                m += fabs(lr[k]) * lwa[k];
+            }
+        }
+        out[r] = s;
+        *mag += m;
+    }
+}
+
+/* Handle i's acceleration (as handle_acc) in the world: angular, and the
+ * linear one of the point c (world). */
+static void handle_world(const aqs_linkage *L, int32_t n, const double a[6], int32_t i, const double c[3],
+                         double al[3], double lin[3])
+{
+    const pose *P = L->t.poses + L->t.nodes[n].poses + i, *Wn = &L->wb->wpose[n];
+    pose H;
+    double l[3], d[3], cr[3];
+    pose_compose(Wn, P, &H);
+    mat3_vec(H.R, a, al);
+    mat3_vec(H.R, a + 3, l);
+    d[0] = c[0] - H.p[0];
+    d[1] = c[1] - H.p[1];
+    d[2] = c[2] - H.p[2];
+    vec3_cross(al, d, cr);
+    lin[0] = l[0] + cr[0];
+    lin[1] = l[1] + cr[1];
+    lin[2] = l[2] + cr[2];
+}
+
+/* The bound on the error node n's joints cause in the bodies beyond its
+ * held handles (docs/math.md §10b, "Beyond a held handle"): for held
+ * handle h, those joints move everything beyond h rigidly with
+ * D_h = a_h - a_e, h's acceleration relative to the composite n hangs from
+ * (entry handle e; the world for a grounded node), both exact at n's handle
+ * forces. For b beyond h: |D_lin(p_b)| + ell_b |D_ang| <= |D_lin(c_0)| +
+ * |D_ang| (R_0 + ellmax), c_0, R_0 the root's sphere. -1 if n has no entry
+ * (the caller falls back to the spheres). */
+static double beyond_bound(const aqs_linkage *L, int32_t n)
+{
+    const struct worldbound *w = L->wb;
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    const double *s0 = w->sph + 4 * t->root, *x = t->data + nd->xf;
+    const int32_t rows = 6 * nd->nh;
+    double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH];
+    double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
+    int32_t i, k, r, entry = -1;
+    if (nd->nh > AQS_WB_MAXH) return -1.0;
+    for (i = 0; i < nd->nh; i++) {
+        int32_t e = t->handles[nd->handles + i];
+        int32_t leaf = t->leaf_of_comp[L->m.eff_child[e]];
+        if (leaf > n - w->size[n] && leaf <= n) entry = i;
+    }
+    if (entry < 0 && !nd->grounded) return -1.0;
+    if (L->dca_form != AQS_DCA_FORM_PHI) {
+        for (k = 0; k < nd->rank; k++) lw[k] = lwa[k] = 0.0;
+        for (r = 0; r < rows; r++) {
+            const double *lr = t->data + nd->lam + (int64_t)r * rows;
+            for (k = 0; k < nd->rank; k++) {
+                lw[k] += lr[k] * x[r];
+                lwa[k] += fabs(lr[k] * x[r]);
+            }
+        }
+    }
+    if (entry >= 0) {
+        handle_acc(L, n, lw, lwa, entry, ae, &mag);
+        handle_world(L, n, ae, entry, s0, ale, line);
+    } else { /* the world: -g everywhere (root trick), no rotation */
+        ale[0] = ale[1] = ale[2] = 0.0;
+        for (k = 0; k < 3; k++) line[k] = -L->gravity[k];
+        mag += sqrt(vec3_dot(line, line));
+    }
+    for (i = 0; i < nd->nh; i++) {
+        double ah[6], al[3], lin[3], m = mag, v;
+        if (i == entry) continue;
+        handle_acc(L, n, lw, lwa, i, ah, &m);
+        handle_world(L, n, ah, i, s0, al, lin);
+        for (k = 0; k < 3; k++) {
+            al[k] -= ale[k];
+            lin[k] -= line[k];
+        }
+        /* rounding: the DCA's relative accuracy times the terms' scale, at
+         * the lever arm of the whole linkage for the angular part */
+        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (1.0 + R0);
+        if (v > best) best = v;
+    }
+    return best;
+}
+
 double worldbound_key(const aqs_linkage *L, int32_t n, double a)
 {
     const struct worldbound *w = L->wb;
     const double *s = w->sph + 4 * n;
-    double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n];
+    double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n], e;
     if (a <= 0.0) return 0.0;
+    /* the bodies inside n: lever arms within n's sphere */
+    e = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
     if (w->holds[n]) {
-        /* bodies beyond n's held handles: anywhere in the root's sphere */
-        const double *s0 = w->sph + 4 * L->t.root;
-        const pose *P = &w->wpose[n];
-        double c[3], far;
-        mat3_vec(P->R, s, c);
-        c[0] += P->p[0];
-        c[1] += P->p[1];
-        c[2] += P->p[2];
-        far = R + vec3_dist(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
-        if (far > rho) rho = far;
+        double far = beyond_bound(L, n);
+        if (far < 0.0) {
+            /* bodies beyond n's held handles: anywhere in the root's sphere */
+            const double *s0 = w->sph + 4 * L->t.root;
+            const pose *P = &w->wpose[n];
+            double c[3];
+            mat3_vec(P->R, s, c);
+            c[0] += P->p[0];
+            c[1] += P->p[1];
+            c[2] += P->p[2];
+            rho = R + vec3_dist(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
+            far = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
+        }
+        if (far > e) e = far;
     }
-    return sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n])) * (1.0 + 1e-12);
+    return e * (1.0 + 1e-12);
 }

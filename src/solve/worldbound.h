@@ -12,9 +12,14 @@
 
 struct worldbound {
     double *sph;          /* 4 per node: centre (node frame), radius (< 0: no point) */
-    double *sl2, *sa2;    /* per node: sum over the counted joints inside of sigma_lin^2, sigma_ang^2 */
+    double *sl2, *sa2;    /* per node: the largest sum of sigma_lin^2 (sigma_ang^2) over the joints
+                             of n on the path from n's entry (or the world) to one of its composites */
+    double *hl2, *ha2;    /* per handle (tree.handles offsets): the same sums on the path to the
+                             handle's composite on n's side (0 for the entry) */
     double *lmax;         /* per node: largest length scale ell_b of a body inside (static) */
     unsigned char *holds; /* per node: it holds up a joint whose child side is outside it */
+    int32_t *size;        /* per node: nodes in its subtree, itself included (the subtree
+                             is the index range (n - size, n]) */
     pose *wpose;          /* per node: world pose of its frame (root: identity), set when
                              its parent is processed (valid for processed and queued nodes) */
     double *ell;          /* per body: ell_b = sqrt(tr(I_com) / (2 m)) (0 if m <= 0) */
