@@ -294,7 +294,7 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    const double *b = t->data + nd->bv + 6 * i, *x = t->data + nd->xf;
+    const double *b = t->data + nd->bv + 6 * i, *x = t->data + nd_xf(nd);
     const int32_t rows = 6 * nd->nh;
     int32_t r, k;
     for (r = 0; r < 6; r++) {
@@ -302,14 +302,14 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
         if (L->dca_form == AQS_DCA_FORM_PHI) {
             int32_t j;
             for (j = 0; j < nd->nh; j++) {
-                const double *blk = t->data + nd->lam + 36 * ((int64_t)nd->nh * i + j) + 6 * r;
+                const double *blk = t->data + nd_lam(nd) + 36 * ((int64_t)nd->nh * i + j) + 6 * r;
                 for (k = 0; k < 6; k++) {
                     s += blk[k] * x[6 * j + k];
                     m += fabs(blk[k] * x[6 * j + k]);
                 }
             }
         } else {
-            const double *lr = t->data + nd->lam + (int64_t)(6 * i + r) * rows;
+            const double *lr = t->data + nd_lam(nd) + (int64_t)(6 * i + r) * rows;
             for (k = 0; k < nd->rank; k++) {
                 s += lr[k] * lw[k];
                 m += fabs(lr[k]) * lwa[k];
@@ -353,7 +353,7 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     const struct worldbound *w = L->wb;
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    const double *s0 = w->sph + 4 * t->root, *x = t->data + nd->xf;
+    const double *s0 = w->sph + 4 * t->root, *x = t->data + nd_xf(nd);
     const int32_t rows = 6 * nd->nh;
     double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH];
     double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
@@ -368,7 +368,7 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     if (L->dca_form != AQS_DCA_FORM_PHI) {
         for (k = 0; k < nd->rank; k++) lw[k] = lwa[k] = 0.0;
         for (r = 0; r < rows; r++) {
-            const double *lr = t->data + nd->lam + (int64_t)r * rows;
+            const double *lr = t->data + nd_lam(nd) + (int64_t)r * rows;
             for (k = 0; k < nd->rank; k++) {
                 lw[k] += lr[k] * x[r];
                 lwa[k] += fabs(lr[k] * x[r]);
