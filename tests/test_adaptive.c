@@ -3,6 +3,7 @@
  * the four measures, on hard cases, the lazy update equals a full
  * recomputation, eps = 0 reproduces the exact trajectory, and the work per
  * step is local (counters, not time). */
+#include "randtree.h"
 #include "testutil.h"
 #include "factor.h"
 
@@ -18,114 +19,6 @@
 #include "update.h"
 
 /* ------------------------------------------------------------ generators */
-
-typedef struct {
-    int32_t nbodies;
-    int floating;
-    int gravity;
-    int nforces;
-    int revolute_only;
-    double mass_spread; /* masses in [1/s, s] (log-uniform) */
-    int chain;          /* every body hangs from the one before: a pure chain */
-} spec;
-
-static void random_unit_quat(uint64_t *rng, double q[4])
-{
-    double n = 0;
-    int i;
-    for (i = 0; i < 4; i++) {
-        q[i] = test_uniform(rng, -1, 1);
-        n += q[i] * q[i];
-    }
-    n = sqrt(n);
-    for (i = 0; i < 4; i++) q[i] /= n;
-}
-
-/* A random tree: body i hangs from a random earlier body (chains when
- * branchiness is small). Returns the finalized linkage. */
-static aqs_linkage *random_linkage(uint64_t *rng, const spec *sp)
-{
-    aqs_linkage *L = NULL;
-    int32_t i, j;
-    static const int32_t kinds[] = {AQS_JOINT_REVOLUTE, AQS_JOINT_PRISMATIC, AQS_JOINT_SPHERICAL,
-                                    AQS_JOINT_UNIVERSAL, AQS_JOINT_CYLINDRICAL, AQS_JOINT_PLANAR,
-                                    AQS_JOINT_FIXED, AQS_JOINT_REVOLUTE, AQS_JOINT_REVOLUTE};
-    double branch = test_uniform(rng, 0, 1);
-    assert_int_equal(aqs_linkage_create(&L), AQS_OK);
-    /* The exact reference of these tests is the DCA back-substitution over
-     * the same coefficients as the adaptive one, so that a difference is
-     * truncation alone; the articulated-body solver (the default) is checked
-     * against the DCA and the dense reference in tests/reference. */
-    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
-    for (i = 0; i < sp->nbodies; i++) {
-        double m = exp(test_uniform(rng, -log(sp->mass_spread), log(sp->mass_spread)));
-        double com[3], I[9] = {0}, a = test_uniform(rng, 0.5, 1.5), b = test_uniform(rng, 0.5, 1.5);
-        for (j = 0; j < 3; j++) com[j] = test_uniform(rng, -0.3, 0.3);
-        /* principal moments obeying the triangle inequality: (a, b, in [|a-b|, a+b]) */
-        I[0] = 0.1 * m * a;
-        I[4] = 0.1 * m * b;
-        I[8] = 0.1 * m * test_uniform(rng, fabs(a - b) + 0.05, a + b);
-        assert_int_equal(aqs_body_add(L, m, com, I, NULL), AQS_OK);
-    }
-    for (i = 0; i < sp->nbodies; i++) {
-        int32_t type, parent;
-        double pos[3], quat[4], axis[3];
-        for (j = 0; j < 3; j++) {
-            pos[j] = test_uniform(rng, -0.8, 0.8);
-            axis[j] = test_uniform(rng, -1, 1);
-        }
-        random_unit_quat(rng, quat);
-        if (i == 0) {
-            parent = AQS_WORLD;
-            type = sp->floating ? AQS_JOINT_FREE : AQS_JOINT_REVOLUTE;
-        } else {
-            int32_t lo = (int32_t)(i - 1 - branch * branch * i);
-            parent = lo + (int32_t)test_uniform(rng, 0, i - lo);
-            if (parent > i - 1 || sp->chain) parent = i - 1;
-            type = sp->revolute_only ? AQS_JOINT_REVOLUTE
-                                     : kinds[(int)test_uniform(rng, 0, sizeof kinds / sizeof kinds[0])];
-        }
-        assert_int_equal(aqs_joint_add(L, type, parent, i, pos, quat, axis, NULL), AQS_OK);
-    }
-    if (aqs_linkage_finalize(L) != AQS_OK) fail_msg("finalize: %s", aqs_linkage_last_error(L));
-    {
-        int32_t nq, nj;
-        double *q;
-        assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, &nq, NULL), AQS_OK);
-        q = malloc(sizeof(double) * (size_t)(nq + 1));
-        assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)nq), AQS_OK);
-        for (j = 0; j < nj; j++) {
-            int32_t off, n;
-            assert_int_equal(aqs_joint_get_layout(L, j, &off, &n, NULL, NULL), AQS_OK);
-            if (n == 4) random_unit_quat(rng, q + off);
-            else if (n == 7) {
-                q[off] = test_uniform(rng, -1, 1);
-                q[off + 1] = test_uniform(rng, -1, 1);
-                q[off + 2] = test_uniform(rng, -1, 1);
-                random_unit_quat(rng, q + off + 3);
-            } else {
-                int32_t k;
-                for (k = 0; k < n; k++) q[off + k] = test_uniform(rng, -1.5, 1.5);
-            }
-        }
-        assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
-        free(q);
-    }
-    if (sp->gravity) {
-        double g[3] = {test_uniform(rng, -2, 2), -9.81, test_uniform(rng, -2, 2)};
-        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-    }
-    for (i = 0; i < sp->nforces; i++) {
-        double f[3], p[3], tq[3];
-        for (j = 0; j < 3; j++) {
-            f[j] = test_uniform(rng, -5, 5);
-            p[j] = test_uniform(rng, -0.5, 0.5);
-            tq[j] = test_uniform(rng, -1, 1);
-        }
-        assert_int_equal(aqs_body_set_force(L, (int32_t)test_uniform(rng, 0, sp->nbodies), f, p, tq), AQS_OK);
-    }
-    return L;
-}
 
 /* ---------------------------------------------------- the error measures */
 
@@ -280,7 +173,7 @@ static void test_bound_holds_random(void **state)
     int c, chains = 0;
     (void)state;
     for (c = 0; c < 500; c++) {
-        spec sp;
+        test_tree_spec sp = {0};
         aqs_linkage *L;
         sp.nbodies = 2 + (int32_t)test_uniform(&rng, 0, c % 5 == 0 ? 150 : 40);
         sp.floating = c % 3 == 0;
@@ -290,7 +183,7 @@ static void test_bound_holds_random(void **state)
         sp.mass_spread = 3.0;
         sp.chain = c % 4 == 1; /* 125 pure chains, 25 of them up to 152 bodies long */
         chains += sp.chain;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         check_bounds(L, &t, 1e-15 * solution_norm(L));
         aqs_linkage_destroy(L);
     }
@@ -313,7 +206,7 @@ static void test_rounding_estimate(void **state)
     int c, certified = 0;
     (void)state;
     for (c = 0; c < 40; c++) {
-        spec sp;
+        test_tree_spec sp = {0};
         aqs_linkage *L;
         aqs_solve_stats st;
         int32_t nv, metric = c % 4, k;
@@ -325,7 +218,7 @@ static void test_rounding_estimate(void **state)
         sp.revolute_only = c % 2;
         sp.mass_spread = 3.0;
         sp.chain = c % 5 == 1;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
         assert_true(nv <= 600);
         memset(&st, 0, sizeof st);
@@ -396,8 +289,8 @@ static void test_joint_bound_kinds(void **state)
     int c, k, metric;
     (void)state;
     for (c = 0; c < 100; c++) {
-        spec sp = {2 + (int32_t)test_uniform(&rng, 0, 120), c % 3 == 0, c % 2, 5, 0, 3.0, 0};
-        aqs_linkage *L = random_linkage(&rng, &sp);
+        test_tree_spec sp = {2 + (int32_t)test_uniform(&rng, 0, 120), c % 3 == 0, c % 2, 5, 0, 3.0, 0, 0.0, 0, 0};
+        aqs_linkage *L = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_set_joint_bound(L, AQS_JOINT_BOUND_SUM), AQS_OK);
         check_bounds(L, &t, 1e-15 * solution_norm(L));
         for (metric = AQS_METRIC_ABS_JOINT; metric <= AQS_METRIC_REL_JOINT; metric++)
@@ -429,8 +322,8 @@ static void test_joint_bound_kinds(void **state)
 static void test_cap_refine_and_outputs(void **state)
 {
     uint64_t rng = 31337;
-    spec sp = {200, 0, 1, 10, 0, 3.0, 0};
-    aqs_linkage *L = random_linkage(&rng, &sp);
+    test_tree_spec sp = {200, 0, 1, 10, 0, 3.0, 0, 0.0, 0, 0};
+    aqs_linkage *L = test_random_tree(&rng, &sp);
     int32_t nv = L->nv, nj = L->njoints, j, computed, uncomputed = 0;
     double *exact = malloc(sizeof(double) * (size_t)nv), *approx = malloc(sizeof(double) * (size_t)nv);
     double *f = malloc(sizeof(double) * 6 * (size_t)nj), err, f1[3] = {1, 2, 3};
@@ -506,13 +399,13 @@ static void test_tree_builders(void **state)
     (void)state;
     for (c = 0; c < 60; c++) {
         uint64_t r1 = 100 + c, r2 = 100 + c;
-        spec sp = {2 + c * 3, c % 3 == 0, c % 2, 4, 0, 3.0, 0};
+        test_tree_spec sp = {2 + c * 3, c % 3 == 0, c % 2, 4, 0, 3.0, 0, 0.0, 0, 0};
         aqs_linkage *A, *B;
         int32_t nv, maxh[2], height[2], k;
         double *qa, *qb;
         /* the same linkage twice; B built by bisection (set before finalize:
          * random_linkage finalizes, so rebuild B's tree through a copy) */
-        A = random_linkage(&r1, &sp);
+        A = test_random_tree(&r1, &sp);
         {
             /* rebuild the same model with the other builder */
             aqs_linkage *src = A;
@@ -602,8 +495,8 @@ static void test_hard_gravity_compensated(void **state)
     (void)state;
     for (d = 0; d < 2; d++)
         for (c = 0; c < 20; c++) {
-            spec sp = {40, 0, 1, 0, 1, 2.0, 0};
-            aqs_linkage *L = random_linkage(&rng, &sp);
+            test_tree_spec sp = {40, 0, 1, 0, 1, 2.0, 0, 0.0, 0, 0};
+            aqs_linkage *L = test_random_tree(&rng, &sp);
             int32_t nj = L->njoints, j, nv = L->nv;
             double *cf = malloc(sizeof(double) * 6 * (size_t)nj), *qdd = malloc(sizeof(double) * (size_t)nv);
             double *tau = calloc((size_t)nj, sizeof(double));
@@ -712,8 +605,8 @@ static void test_hard_chain_and_mass_ratios(void **state)
         aqs_linkage_destroy(L);
     }
     for (c = 0; c < 20; c++) {
-        spec sp = {40 + 10 * (c % 3), c % 2, 1, 3, c % 4 == 0, 1e3, 0}; /* ratios up to 1e6 */
-        aqs_linkage *L = random_linkage(&rng, &sp);
+        test_tree_spec sp = {40 + 10 * (c % 3), c % 2, 1, 3, c % 4 == 0, 1e3, 0, 0.0, 0, 0}; /* ratios up to 1e6 */
+        aqs_linkage *L = test_random_tree(&rng, &sp);
         check_bounds(L, &t, MASS_RATIO_FLOOR * solution_norm(L));
         check_node_values(L);
         aqs_linkage_destroy(L);
@@ -814,8 +707,8 @@ static void per_node_diff(const aqs_linkage *L, const snapshot *a, const snapsho
 static void test_lazy_equals_eager(void **state)
 {
     uint64_t rng = 99;
-    spec sp = {300, 0, 1, 5, 0, 3.0, 0};
-    aqs_linkage *L = random_linkage(&rng, &sp);
+    test_tree_spec sp = {300, 0, 1, 5, 0, 3.0, 0, 0.0, 0, 0};
+    aqs_linkage *L = test_random_tree(&rng, &sp);
     snapshot lazy, full;
     int step, partial = 0, fullupd = 0, predicted = 0, nstale = 0;
     double dphi, dgram;
@@ -894,8 +787,8 @@ static void test_lazy_equals_eager(void **state)
 static void test_eps_zero_trajectory(void **state)
 {
     uint64_t rng1 = 5, rng2 = 5;
-    spec sp = {120, 1, 1, 4, 0, 3.0, 0};
-    aqs_linkage *A = random_linkage(&rng1, &sp), *B = random_linkage(&rng2, &sp);
+    test_tree_spec sp = {120, 1, 1, 4, 0, 3.0, 0, 0.0, 0, 0};
+    aqs_linkage *A = test_random_tree(&rng1, &sp), *B = test_random_tree(&rng2, &sp);
     int32_t nq, step;
     double *qa, *qb, worst = 0;
     (void)state;
@@ -992,8 +885,8 @@ static void check_rejected_doubles(aqs_linkage *L, set_double_fn set, get_double
 static void test_exact_fallback(void **state)
 {
     uint64_t r1 = 4242, r2 = 4242;
-    spec sp = {300, 0, 0, 40, 0, 3.0, 0};
-    aqs_linkage *L = random_linkage(&r1, &sp), *X = random_linkage(&r2, &sp);
+    test_tree_spec sp = {300, 0, 0, 40, 0, 3.0, 0, 0.0, 0, 0};
+    aqs_linkage *L = test_random_tree(&r1, &sp), *X = test_random_tree(&r2, &sp);
     static const double bad[] = {NAN, INFINITY, -0.1, 1.5};
     const double f1[3] = {0.5, -1, 2};
     aqs_solve_stats st;
@@ -1107,7 +1000,7 @@ static void test_prediction(void **state)
     (void)state;
     for (c = 0; c < 16; c++) {
         int metric = c % 4;
-        spec sp;
+        test_tree_spec sp = {0};
         uint64_t r0;
         aqs_linkage *L, *O, *X;
         int32_t nv;
@@ -1121,11 +1014,11 @@ static void test_prediction(void **state)
         sp.mass_spread = 3.0;
         sp.chain = c % 7 == 3;
         r0 = rng;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         rng = r0;
-        O = random_linkage(&rng, &sp);
+        O = test_random_tree(&rng, &sp);
         rng = r0;
-        X = random_linkage(&rng, &sp);
+        X = test_random_tree(&rng, &sp);
         /* the reference back-substitutes the same DCA coefficients: where L
          * computes every joint the difference is rounding of the same code
          * (the articulated-body solver differs by ~1e-13 relative) */
@@ -1229,7 +1122,7 @@ static void test_prediction(void **state)
 static void test_prediction_refine(void **state)
 {
     uint64_t rng = 4711, r0;
-    spec sp = {250, 0, 1, 12, 1, 3.0, 0}; /* fixed base, revolute: positions copy exactly */
+    test_tree_spec sp = {250, 0, 1, 12, 1, 3.0, 0, 0.0, 0, 0}; /* fixed base, revolute: positions copy exactly */
     int metric, step, refined = 0, predicted = 0;
     (void)state;
     for (metric = 0; metric < 4; metric++) {
@@ -1237,9 +1130,9 @@ static void test_prediction_refine(void **state)
         double *exact, *approx, *q, norm;
         int32_t nv;
         r0 = rng;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         rng = r0;
-        X = random_linkage(&rng, &sp);
+        X = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive solves and refines */
         nv = L->nv;
@@ -1297,8 +1190,8 @@ static void test_prediction_refine(void **state)
 static void test_prediction_settings(void **state)
 {
     uint64_t rng = 31;
-    spec sp = {200, 0, 1, 10, 0, 3.0, 0};
-    aqs_linkage *L = random_linkage(&rng, &sp), *U = NULL;
+    test_tree_spec sp = {200, 0, 1, 10, 0, 3.0, 0, 0.0, 0, 0};
+    aqs_linkage *L = test_random_tree(&rng, &sp), *U = NULL;
     static const double bad[] = {NAN, INFINITY, -1.0, 0.5, 1e-300};
     double m = -1;
     int k;

@@ -5,6 +5,7 @@
  * trajectories with the prediction on and off; the lower bound of the
  * relative form; the lazily updated spheres against a full recomputation
  * and against the bodies' world positions; the API. */
+#include "randtree.h"
 #include "testutil.h"
 
 #include <math.h>
@@ -19,91 +20,6 @@
 
 /* ------------------------------------------------------------ generators */
 
-typedef struct {
-    int32_t nbodies;
-    int floating, gravity, nforces, revolute_only, chain;
-    double mass_spread; /* masses log-uniform in [1/s, s] */
-    double reach;       /* joint placements in [-reach, reach]^3 */
-} spec;
-
-static void random_unit_quat(uint64_t *rng, double q[4])
-{
-    test_random_quat(rng, q);
-}
-
-static aqs_linkage *random_linkage(uint64_t *rng, const spec *sp)
-{
-    aqs_linkage *L = NULL;
-    int32_t i, j;
-    static const int32_t kinds[] = {AQS_JOINT_REVOLUTE, AQS_JOINT_PRISMATIC, AQS_JOINT_SPHERICAL,
-                                    AQS_JOINT_UNIVERSAL, AQS_JOINT_CYLINDRICAL, AQS_JOINT_PLANAR,
-                                    AQS_JOINT_FIXED, AQS_JOINT_REVOLUTE, AQS_JOINT_REVOLUTE};
-    double branch = test_uniform(rng, 0, 1);
-    assert_int_equal(aqs_linkage_create(&L), AQS_OK);
-    /* the twin reference back-substitutes the same DCA coefficients */
-    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
-    for (i = 0; i < sp->nbodies; i++) {
-        double m = exp(test_uniform(rng, -log(sp->mass_spread), log(sp->mass_spread)));
-        double com[3], I[9] = {0}, a = test_uniform(rng, 0.5, 1.5), b = test_uniform(rng, 0.5, 1.5);
-        for (j = 0; j < 3; j++) com[j] = test_uniform(rng, -0.3, 0.3);
-        I[0] = 0.1 * m * a;
-        I[4] = 0.1 * m * b;
-        I[8] = 0.1 * m * test_uniform(rng, fabs(a - b) + 0.05, a + b);
-        assert_int_equal(aqs_body_add(L, m, com, I, NULL), AQS_OK);
-    }
-    for (i = 0; i < sp->nbodies; i++) {
-        int32_t type, parent;
-        double pos[3], quat[4], axis[3];
-        for (j = 0; j < 3; j++) {
-            pos[j] = test_uniform(rng, -sp->reach, sp->reach);
-            axis[j] = test_uniform(rng, -1, 1);
-        }
-        random_unit_quat(rng, quat);
-        if (i == 0) {
-            parent = AQS_WORLD;
-            type = sp->floating ? AQS_JOINT_FREE : AQS_JOINT_REVOLUTE;
-        } else {
-            int32_t lo = (int32_t)(i - 1 - branch * branch * i);
-            parent = lo + (int32_t)test_uniform(rng, 0, i - lo);
-            if (parent > i - 1 || sp->chain) parent = i - 1;
-            type = sp->revolute_only ? (i % 5 == 2 ? AQS_JOINT_PRISMATIC : AQS_JOINT_REVOLUTE)
-                                     : kinds[(int)test_uniform(rng, 0, sizeof kinds / sizeof kinds[0])];
-        }
-        assert_int_equal(aqs_joint_add(L, type, parent, i, pos, quat, axis, NULL), AQS_OK);
-    }
-    if (aqs_linkage_finalize(L) != AQS_OK) fail_msg("finalize: %s", aqs_linkage_last_error(L));
-    {
-        double *q = malloc(sizeof(double) * (size_t)(L->nq + 1));
-        assert_int_equal(aqs_linkage_get_positions(L, q, (size_t)L->nq), AQS_OK);
-        for (j = 0; j < L->njoints; j++) {
-            int32_t off, n;
-            assert_int_equal(aqs_joint_get_layout(L, j, &off, &n, NULL, NULL), AQS_OK);
-            if (n == 4) random_unit_quat(rng, q + off);
-            else if (n == 7) {
-                for (i = 0; i < 3; i++) q[off + i] = test_uniform(rng, -1, 1);
-                random_unit_quat(rng, q + off + 3);
-            } else
-                for (i = 0; i < n; i++) q[off + i] = test_uniform(rng, -1.5, 1.5);
-        }
-        assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)L->nq), AQS_OK);
-        free(q);
-    }
-    if (sp->gravity) {
-        double g[3] = {test_uniform(rng, -2, 2), -9.81, test_uniform(rng, -2, 2)};
-        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-    }
-    for (i = 0; i < sp->nforces; i++) {
-        double f[3], p[3], tq[3];
-        for (j = 0; j < 3; j++) {
-            f[j] = test_uniform(rng, -5, 5);
-            p[j] = test_uniform(rng, -0.5, 0.5);
-            tq[j] = test_uniform(rng, -1, 1);
-        }
-        assert_int_equal(aqs_body_set_force(L, (int32_t)test_uniform(rng, 0, sp->nbodies), f, p, tq),
-                         AQS_OK);
-    }
-    return L;
-}
 
 /* ------------------------------------------------------------ reference */
 
@@ -218,8 +134,8 @@ static void test_body_accel_fd(void **state)
     double worst = 0;
     (void)state;
     for (c = 0; c < 20; c++) {
-        spec sp = {12 + c, 0, 0, 0, 1, c % 3 == 0, 3.0, 0.8};
-        aqs_linkage *L = random_linkage(&rng, &sp);
+        test_tree_spec sp = {12 + c, 0, 0, 0, 1, 3.0, c % 3 == 0, 0.8, 1, 1};
+        aqs_linkage *L = test_random_tree(&rng, &sp);
         int32_t nb = L->nbodies, nq = L->nq, i;
         double *q = malloc(sizeof(double) * (size_t)nq), *qp = malloc(sizeof(double) * (size_t)nq);
         double *d = malloc(sizeof(double) * (size_t)nq), *lin = malloc(sizeof(double) * 3 * (size_t)nb);
@@ -334,12 +250,12 @@ static void check_linkage(aqs_linkage *L, aqs_linkage *X, double floor_rel, tall
         }
 }
 
-static void twins(uint64_t *rng, const spec *sp, aqs_linkage **L, aqs_linkage **X)
+static void twins(uint64_t *rng, const test_tree_spec *sp, aqs_linkage **L, aqs_linkage **X)
 {
     uint64_t r0 = *rng;
-    *L = random_linkage(rng, sp);
+    *L = test_random_tree(rng, sp);
     *rng = r0;
-    *X = random_linkage(rng, sp);
+    *X = test_random_tree(rng, sp);
 }
 
 static void test_bound_random(void **state)
@@ -349,7 +265,7 @@ static void test_bound_random(void **state)
     int c;
     (void)state;
     for (c = 0; c < 200; c++) {
-        spec sp;
+        test_tree_spec sp = {0};
         aqs_linkage *L, *X;
         sp.nbodies = 2 + (int32_t)test_uniform(&rng, 0, c % 5 == 0 ? 120 : 40);
         sp.floating = c % 3 == 0;
@@ -359,6 +275,7 @@ static void test_bound_random(void **state)
         sp.chain = c % 4 == 1;
         sp.mass_spread = 3.0;
         sp.reach = c % 7 == 0 ? 5.0 : 0.8;
+        sp.some_prismatic = sp.uniform_quat = 1;
         twins(&rng, &sp, &L, &X);
         check_linkage(L, X, 1e-12, &t);
         aqs_linkage_destroy(L);
@@ -493,14 +410,14 @@ static void test_bound_trajectories(void **state)
     for (c = 0; c < 8; c++) {
         int metric = AQS_METRIC_ABS_WORLD + c % 2, step;
         double eps = ldexp(1.0, -(4 + 2 * c)), margin = -1;
-        spec sp = {150 + 20 * c, c % 3 == 0, c % 2 == 0, 1 + c, c % 2 == 1, c % 4 == 2, 3.0, 0.8};
+        test_tree_spec sp = {150 + 20 * c, c % 3 == 0, c % 2 == 0, 1 + c, c % 2 == 1, 3.0, c % 4 == 2, 0.8, 1, 1};
         uint64_t r0 = rng;
         aqs_linkage *L, *O, *X;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         rng = r0;
-        O = random_linkage(&rng, &sp);
+        O = test_random_tree(&rng, &sp);
         rng = r0;
-        X = random_linkage(&rng, &sp);
+        X = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         assert_int_equal(aqs_linkage_set_tolerance(O, metric, eps), AQS_OK);
@@ -605,14 +522,14 @@ static void test_spheres_lazy(void **state)
     long checked = 0;
     (void)state;
     for (c = 0; c < 6; c++) {
-        spec sp = {60 + 30 * c, c % 3 == 0, 1, 3, c % 2, c % 4 == 1, 3.0, 0.8};
+        test_tree_spec sp = {60 + 30 * c, c % 3 == 0, 1, 3, c % 2, 3.0, c % 4 == 1, 0.8, 1, 1};
         uint64_t r0 = rng;
         aqs_linkage *L, *Y;
         int32_t step, n, b;
         double *com;
-        L = random_linkage(&rng, &sp);
+        L = test_random_tree(&rng, &sp);
         rng = r0;
-        Y = random_linkage(&rng, &sp);
+        Y = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_ABS_WORLD, 1e-3), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
         for (step = 0; step < 20; step++)
@@ -681,8 +598,8 @@ static void test_path_sums(void **state)
     long checked = 0;
     (void)state;
     for (c = 0; c < 12; c++) {
-        spec sp = {20 + 25 * c, c % 3 == 0, 1, 2, 0, c % 4 == 1, 3.0, 0.8};
-        aqs_linkage *L = random_linkage(&rng, &sp);
+        test_tree_spec sp = {20 + 25 * c, c % 3 == 0, 1, 2, 0, 3.0, c % 4 == 1, 0.8, 1, 1};
+        aqs_linkage *L = test_random_tree(&rng, &sp);
         const model *m;
         const tree *t;
         int32_t *parent_eff, *first, n, e, k;
@@ -731,8 +648,8 @@ static void test_path_sums(void **state)
 static void test_api(void **state)
 {
     uint64_t rng = 8;
-    spec sp = {40, 0, 1, 3, 0, 0, 3.0, 0.8};
-    aqs_linkage *L = random_linkage(&rng, &sp);
+    test_tree_spec sp = {40, 0, 1, 3, 0, 3.0, 0, 0.8, 1, 1};
+    aqs_linkage *L = test_random_tree(&rng, &sp);
     aqs_solve_stats st;
     double b1;
     (void)state;
