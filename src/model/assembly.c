@@ -122,6 +122,13 @@ static aqs_status contract(builder *B, int32_t nvert)
             int32_t c = live[k], n, e;
             if (stamp[c] == round || nodes[c].nh != 1) continue;
             e = B->hv[nodes[c].handles];
+            /* The world holding only a free joint is joined last: the root
+             * node then solves the floating base's joint against the whole
+             * system's mobility, not against the base's alone (a base of tiny
+             * rotational inertia k would give the joint's acceleration as a
+             * difference of 1/k-sized terms; docs/math.md 4a). */
+            if (c == B->L->m.ncomp && nlive > 2 && B->L->joints[B->L->m.eff_joint[e]].type == AQS_JOINT_FREE)
+                continue;
             n = across(B, c, e);
             if (stamp[n] == round) continue;
             if (merge(B, c, n, e, stamp, round) != 0) {

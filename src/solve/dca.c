@@ -477,7 +477,264 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         gw[i] = x;
     }
     memcpy(gamma, gw, sizeof gw);
-    rounding_node(L, n, U, G2, E, beta, Q, Lc, ncol, bo);
+    rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, ncol, 0.0, bo);
+    return 0;
+}
+
+/* ---- The rigid join in inertia form (docs/math.md 4a, "Rigid sides: the
+ * join in inertia form"). Where both children are rigid (no Lambda) and
+ * neither holds the world, the node is two rigid bodies and joint k. With
+ * every quantity in k's child frame K, I_A, I_B the sides' spatial inertias,
+ * I_C = I_A + I_B (inverted through its centre of mass, mp_y), Pa = I_C^-1 I_A
+ * and Pb = I_C^-1 I_B (Pa + Pb = 1), the joint's mode moves A by -Pb S and B
+ * by Pa S, and its inertia is the Schur complement
+ *   D = S^T I_A I_C^-1 I_B S  (= S^T (I_A^-1 + I_B^-1)^-1 S),
+ * as the ABA forms it. With V = I_A I_C^-1 I_B (the reduced inertia), U =
+ * D^-1 S^T V and Pr = 1 - U^T S^T, the section-4 outputs are
+ *   rho = D^-1 Q - U beta,      gamma = V beta + V S rho,
+ *   FX_h = Pr Pb^T G_h^T (A's handles), -Pr Pa^T G_h^T (B's),
+ *   QX_h = D^-1 (Pb S)^T G_h^T,         -D^-1 (Pa S)^T G_h^T,
+ *   b_C,h = b^A_h - G_h Pb (beta + S rho),   b^B_h + G_h Pa (beta + S rho),
+ *   Lambda_C,h = -G_h Pb S R^-T,             G_h Pa S R^-T      (D = R R^T),
+ * (G_h: K to handle h). None of them goes through I_A^-1 or I_B^-1: a side's
+ * near-free rotation (a near point mass, a tiny floating base), whose mobility
+ * 1/k the square-root form reduces by reflections with an absolute error
+ * u/sqrt(k), never appears; the spin about the joint axis enters as the
+ * inertia k + m r^2 in D. */
+
+/* The sides' mobility is dominated by a near-free rotation: a side's
+ * rotational mobility (trace Ic^-1) times the mass and squared distance of the
+ * other side's centre of mass (the lever the joint adds), above RJ_RATIO. */
+#define RJ_RATIO 1e3
+
+/* Cholesky of the d x d SPD matrix D (d <= 6) in place (lower). -1 if not PD. */
+static int small_cholesky(double *D, int32_t d)
+{
+    int32_t i, j, k;
+    for (j = 0; j < d; j++) {
+        double s = D[d * j + j];
+        for (k = 0; k < j; k++) s -= D[d * j + k] * D[d * j + k];
+        if (!(s > 0.0) || !isfinite(s)) return -1;
+        s = sqrt(s);
+        D[d * j + j] = s;
+        for (i = j + 1; i < d; i++) {
+            double x = D[d * i + j];
+            for (k = 0; k < j; k++) x -= D[d * i + k] * D[d * j + k];
+            D[d * i + j] = x / s;
+        }
+        for (i = 0; i < j; i++) D[d * i + j] = 0.0;
+    }
+    return 0;
+}
+
+/* 1 if a join of two rigid sides takes the inertia form (rigid_join): a side's
+ * rotational mobility trace(Ic^-1) = |Jc|^2 times the reduced mass and the
+ * squared distance between the centres of mass (what turns a relative
+ * rotation into a relative translation) above RJ_RATIO. mpA, mpB: the sides'
+ * mass properties in one frame; JA, JB their mp_factor. */
+static int rigid_join_wanted(const double *mpA, const double *mpB, const double JA[9], const double JB[9])
+{
+    double trA = 0.0, trB = 0.0, e2 = 0.0;
+    int32_t i;
+    for (i = 0; i < 9; i++) {
+        trA += JA[i] * JA[i];
+        trB += JB[i] * JB[i];
+    }
+    for (i = 1; i < 4; i++) e2 += (mpB[i] - mpA[i]) * (mpB[i] - mpA[i]);
+    return (trA > trB ? trA : trB) * (mpA[0] * mpB[0] / (mpA[0] + mpB[0])) * e2 > RJ_RATIO;
+}
+
+/* Node n's update in inertia form (both children rigid and not grounded): the
+ * same outputs as hybrid_phi (mass properties, Lambda of rank d, b, FX, QX,
+ * rho, gamma) by the formulas above. Returns 0, or -1 when a composite
+ * inertia or D is not positive definite. */
+static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
+                      const double *Q)
+{
+    tree *t = &L->t;
+    node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
+    const pose *J = t->poses + nd_J(C);
+    const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
+    const double *bA = t->data + A->bv, *bB = t->data + B->bv;
+    double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C), *bC = t->data + C->bv;
+    double *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *rho = t->data + nd_rho(C),
+           *gamma = t->data + nd_gamma(C);
+    const int32_t nA = A->nh, nh = C->nh, nAo = nA - 1, orows = 6 * nh;
+    double IB[13], mA[13], mB[13], mC[13], Ia[36], Ib[36], Yc[36], Pa[36], Pb[36], T6[36];
+    double PaS[36], PbS[36], VS[36], D[36], Di[36], R[36], U[36], Pr[36], W[36], Za[36], Zb[36];
+    double La[36], Lb[36], Qa[36], Qb[36], g[6], z[6], Vb[6], G2[36];
+    pose Pk, Pkb, Kin, PBi, Ph;
+    int32_t i, j, r, s, ci;
+
+    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
+    pose_compose(&Pk, &PB[C->kb], &Pkb); /* K (k's child frame) in C's frame */
+    for (ci = 0; ci <= nh; ci++) { /* as in hybrid_phi: no digit of the geometry left */
+        const double *p = ci < nh ? P[ci].p : Pkb.p;
+        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
+    }
+    memset(IB, 0, sizeof IB);
+    model_mass_add_posed(IB, &Pk, IBb);
+    C->grounded = 0;
+    memcpy(IC, IA, 13 * sizeof(double));
+    model_mass_add(IC, IB[0], IB + 1, IB + 4);
+    /* the sides' and the composite's mass properties in K */
+    pose_inverse(&Pkb, &Kin);
+    pose_inverse(&PB[C->kb], &PBi);
+    memset(mA, 0, sizeof mA);
+    memset(mB, 0, sizeof mB);
+    model_mass_add_posed(mA, &Kin, IA);
+    model_mass_add_posed(mB, &PBi, IBb);
+    memcpy(mC, mA, sizeof mC);
+    model_mass_add(mC, mB[0], mB + 1, mB + 4);
+    if (mp_inverse_factor(mC, Yc) != 0) return -1;
+    spatial_inertia(mA[0], mA + 1, mA + 4, Ia);
+    spatial_inertia(mB[0], mB + 1, mB + 4, Ib);
+    /* Pa = I_C^-1 I_A = Yc (Yc^T I_A), Pb likewise */
+    dense_mul_tn(Yc, Ia, T6, 6, 6, 6);
+    dense_mul66(Yc, T6, Pa);
+    dense_mul_tn(Yc, Ib, T6, 6, 6, 6);
+    dense_mul66(Yc, T6, Pb);
+    /* Pa S, Pb S (6 x d); V S = I_A Pb S; D = S^T V S (symmetrized) */
+    dense_mul(Pa, S, PaS, 6, 6, d);
+    dense_mul(Pb, S, PbS, 6, 6, d);
+    dense_mul(Ia, PbS, VS, 6, 6, d);
+    for (r = 0; r < d; r++)
+        for (s = 0; s <= r; s++) {
+            double x = 0.0, y = 0.0;
+            for (i = 0; i < 6; i++) {
+                x += S[i * d + r] * VS[i * d + s];
+                y += S[i * d + s] * VS[i * d + r];
+            }
+            D[d * r + s] = D[d * s + r] = 0.5 * (x + y);
+        }
+    memcpy(R, D, sizeof(double) * (size_t)(d * d));
+    if (small_cholesky(R, d) != 0) return -1;
+    /* Di = D^-1 = R^-T R^-1 */
+    for (j = 0; j < d; j++) {
+        double e[6] = {0, 0, 0, 0, 0, 0}, y[6];
+        e[j] = 1.0;
+        for (i = 0; i < d; i++) { /* R y = e */
+            double x = e[i];
+            for (s = 0; s < i; s++) x -= R[d * i + s] * y[s];
+            y[i] = x / R[d * i + i];
+        }
+        for (i = d - 1; i >= 0; i--) { /* R^T z = y */
+            double x = y[i];
+            for (s = i + 1; s < d; s++) x -= R[d * s + i] * Di[d * s + j];
+            Di[d * i + j] = x / R[d * i + i];
+        }
+    }
+    /* U = D^-1 (V S)^T (d x 6); Pr = 1 - U^T S^T; W = Pr V (for the rounding estimate) */
+    for (r = 0; r < d; r++)
+        for (j = 0; j < 6; j++) {
+            double x = 0.0;
+            for (s = 0; s < d; s++) x += Di[d * r + s] * VS[j * d + s];
+            U[6 * r + j] = x;
+        }
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double x = i == j ? 1.0 : 0.0;
+            for (r = 0; r < d; r++) x -= U[6 * r + i] * S[j * d + r];
+            Pr[6 * i + j] = x;
+        }
+    dense_mul66(Ia, Pb, T6); /* V */
+    dense_mul66(Pr, T6, W);
+    /* rho = D^-1 Q - U beta; gamma = V beta + V S rho */
+    dense_matvec6(T6, beta, Vb);
+    for (r = 0; r < d; r++) {
+        double x = 0.0;
+        for (s = 0; s < d; s++) x += Di[d * r + s] * Q[s];
+        for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
+        if (!isfinite(x)) return -1;
+        rho[r] = x;
+    }
+    for (i = 0; i < 6; i++) {
+        double x = Vb[i];
+        for (r = 0; r < d; r++) x += VS[i * d + r] * rho[r];
+        gamma[i] = x;
+        z[i] = beta[i];
+        for (r = 0; r < d; r++) z[i] += S[i * d + r] * rho[r]; /* beta + S rho */
+    }
+    /* per-side matrices, columns K-frame motions moved to each handle below:
+     * Za = (Pr Pb^T)^T = Pb Pr^T, Zb = -Pa Pr^T (FX_h^T = G_h Z);
+     * La = -Pb S R^-T, Lb = Pa S R^-T (Lambda); Qa = Pb S D^-1, Qb = -Pa S D^-1 (QX_h^T) */
+    dense_mul66_nt(Pb, Pr, Za);
+    dense_mul66_nt(Pa, Pr, Zb);
+    for (i = 0; i < 36; i++) Zb[i] = -Zb[i];
+    memset(La, 0, sizeof La);
+    memset(Lb, 0, sizeof Lb);
+    memset(Qa, 0, sizeof Qa);
+    memset(Qb, 0, sizeof Qb);
+    for (i = 0; i < 6; i++) {
+        for (j = 0; j < d; j++) { /* row i of (P S) R^-T: solve R y = (P S)_i^T */
+            double xa = -PbS[i * d + j], xb = PaS[i * d + j];
+            for (s = 0; s < j; s++) {
+                xa -= R[d * j + s] * La[6 * i + s];
+                xb -= R[d * j + s] * Lb[6 * i + s];
+            }
+            La[6 * i + j] = xa / R[d * j + j];
+            Lb[6 * i + j] = xb / R[d * j + j];
+        }
+        for (j = 0; j < d; j++) {
+            double xa = 0.0, xb = 0.0;
+            for (s = 0; s < d; s++) {
+                xa += PbS[i * d + s] * Di[d * s + j];
+                xb -= PaS[i * d + s] * Di[d * s + j];
+            }
+            Qa[6 * i + j] = xa;
+            Qb[6 * i + j] = xb;
+        }
+    }
+    /* g = Pb (beta + S rho) moves A's handles, -Pa (beta + S rho) B's */
+    {
+        double ga[6], gb[6];
+        dense_matvec6(Pb, z, ga);
+        dense_matvec6(Pa, z, gb);
+        for (i = 0; i < 6; i++) {
+            g[i] = -ga[i];
+            z[i] = gb[i];
+        }
+    }
+    for (ci = 0; ci < nh; ci++) {
+        const int a = ci < nAo;
+        const int32_t src = a ? (ci < C->ka ? ci : ci + 1) : (ci - nAo < C->kb ? ci - nAo : ci - nAo + 1);
+        const double *bs = (a ? bA : bB) + 6 * src;
+        double F6[36], L6[36], Q6[36], db[6];
+        pose_compose(&Kin, &P[ci], &Ph); /* handle ci in K */
+        xform_cols(&Ph, a ? Za : Zb, F6, 6);
+        xform_cols(&Ph, a ? La : Lb, L6, 6);
+        xform_cols(&Ph, a ? Qa : Qb, Q6, 6);
+        spatial_xform_motion(&Ph, a ? g : z, db);
+        for (r = 0; r < 6; r++) {
+            const int32_t o = 6 * ci + r;
+            for (i = 0; i < 6; i++) FX[(int64_t)i * orows + o] = F6[6 * r + i];
+            for (j = 0; j < d; j++) QX[(int64_t)j * orows + o] = Q6[6 * r + j];
+            memcpy(LC + (int64_t)o * orows, L6 + 6 * r, sizeof(double) * (size_t)d);
+            bC[o] = bs[r] + db[r];
+        }
+    }
+    C->rank = d;
+    C->jw = d;
+    memcpy(G2, Di, sizeof(double) * (size_t)(d * d));
+    {
+        double *bov = t->hscratch; /* the outer handles' b, for the rounding estimate */
+        for (ci = 0; ci < nh; ci++) {
+            const int a = ci < nAo;
+            const int32_t src = a ? (ci < C->ka ? ci : ci + 1) : (ci - nAo < C->kb ? ci - nAo : ci - nAo + 1);
+            memcpy(bov + 6 * ci, (a ? bA : bB) + 6 * src, 6 * sizeof(double));
+        }
+        /* the level of the reduction: Pa, Pb's size (the levers they carry)
+         * times the cancellation in D = S^T V S */
+        double pm = 0.0, dn = 0.0, dt = 0.0;
+        for (i = 0; i < 36; i++) pm = fmax(pm, fmax(fabs(Pa[i]), fabs(Pb[i])));
+        for (r = 0; r < d; r++) {
+            dn += D[d * r + r];
+            for (i = 0; i < 6; i++) dt += fabs(S[i * d + r] * VS[i * d + r]);
+        }
+        rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, 0, pm * (dt / dn), bov);
+    }
     return 0;
 }
 
@@ -556,6 +813,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             mp_y(JB, sB, IB + 1, YB);
             for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
         }
+        if (rA == 0 && rB == 0 && !C->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
+            return rigid_join(L, n, S, d, beta, Q);
         memcpy(cF, (wa >= wb ? IA : IB) + 1, sizeof cF);
         for (i = 0; i < 3; i++) {
             cA[i] = IA[1 + i] - cF[i];

@@ -68,7 +68,8 @@ static void child_levels(const tree *t, const node *c, double *k, double *kb)
 }
 
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
-                   const double *beta, const double *Q, const double *Lc, int32_t ncol, const double *bo)
+                   const double *W, const double *beta, const double *Q, const double *Lc, int32_t ncol,
+                   double gpiv, const double *bo)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
@@ -81,7 +82,9 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
 
     child_levels(t, A, &kA, &kbA);
     child_levels(t, B, &kB, &kbB);
-    if (c > 0) {
+    if (!Lc) {
+        g += gpiv;
+    } else if (c > 0) {
         double pmax = 0.0, pmin = INFINITY;
         for (i = 0; i < c; i++) {
             double p = fabs(Lc[(int64_t)i * ncol + i]);
@@ -125,16 +128,25 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
         srho += a * a;
     }
-    for (k = 0; k < c; k++) {
-        double a = 0.0;
-        for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
-        eb[k] = a;
-    }
-    for (j = 0; j < 6; j++) {
-        double a = 0.0;
-        for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
-        for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
-        sgam += a * a;
+    if (E) {
+        for (k = 0; k < c; k++) {
+            double a = 0.0;
+            for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
+            eb[k] = a;
+        }
+        for (j = 0; j < 6; j++) {
+            double a = 0.0;
+            for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
+            for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+            sgam += a * a;
+        }
+    } else { /* the rigid join: W itself */
+        for (j = 0; j < 6; j++) {
+            double a = 0.0;
+            for (k = 0; k < 6; k++) a += fabs(W[6 * j + k] * beta[k]);
+            for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+            sgam += a * a;
+        }
     }
     RN(t, C)[RND_RHO] = fu * kbeta * sqrt(srho);
     RN(t, C)[RND_GAM] = fu * kbeta * sqrt(sgam);

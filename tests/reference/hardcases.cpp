@@ -112,17 +112,18 @@ struct KnownBad {
     const char *why;
 };
 // The square-root form (the default; docs/math.md section 4a), measured 2026-12-02. The
-// chains, the welded point masses and the prismatic chains now pass; these do not reach
+// chains, the point masses (welded, and lone since the rigid join in inertia form), the
+// floating bases (since the world's free joint is joined last) and the prismatic chains now
+// pass; these do not reach
 // 10x the ABA yet (and the adaptive "true <= bound + 10x ABA" fails with them):
 const KnownBad kKnownBad[] = {
-    {"pointmass/chain6/k=1e-06", false, true, "adaptive: DCA 8e-15, 22x the ABA"},
-    {"pointmass/chain6/", true, true, "lone near point mass: DCA 2e-13 (k = 1e-8) .. 1.3e-9 (k = 1e-16)"},
     {"altmass/r=1e+03/n=1000", true, false, "mass ratio: DCA 9e-14 (adaptive passes)"},
     {"altmass/", true, true, "mass ratio: DCA ~ 1e-16 x ratio (1e9: 1.1e-7)"},
     {"near_eq/", true, true, "DCA 40-80x the ABA's error (free subassemblies' accelerations)"},
     {"lightdistal/", true, true, "heavy and light handles in one node: 1.7e-14 (1e-6) .. 9.4e-12 (1e-12)"},
-    {"floating/k=1e-04", true, false, "DCA 5e-14, 60x the ABA (adaptive passes)"},
-    {"floating/", true, true, "near-free spin mode of a tiny base: DCA ~ 1e-17/k"},
+    // One of 39 floating-base solves over 13 seeds: the exact DCA passes (rel2 3.3e-15, 4x the
+    // ABA) but one joint's absolute error, 3.6e-14, is above 10x the ABA's in abs_joint.
+    {"floating/k=1e-08/seed=9", false, true, "adaptive abs_joint: one joint 3.6e-14, >10x the ABA's"},
     // Long mode: the straight chain under gravity at 10^6 links, 1.4e-12 (the ABA 1.3e-16;
     // 5e-16 at 10^5, and the same chain under a tip force 1.9e-16 at 10^6).
     {"chain/straight/g/n=1000000", true, true, "DCA 1.4e-12 at 10^6 links under gravity"},

@@ -31,6 +31,8 @@ def main(path):
         if r.get("solver") == "bound":
             bound.setdefault(r["family"], []).append(r)
             continue
+        if r.get("solver") == "world":  # the world-measure sweep (printed by hardcases itself)
+            continue
         name = r["case"]
         if name not in rows:
             rows[name] = {"adaptive": {m: [] for m in METRICS}}
