@@ -341,6 +341,7 @@ void adaptive_solve(aqs_linkage *L)
     }
     if (s->eps == 0.0 && s->max_computed == 0) {
         /* Exact: every node, parents before children (descending index). */
+        if (worldbound_active(L)) worldbound_begin(L); /* world poses and L_w, for the rounding estimate */
         for (n = t->nnodes - 1; n >= 0; n--)
             if (t->nodes[n].joint >= 0) process(L, n, kids);
         finish_exact(L);

@@ -24,6 +24,10 @@ struct worldbound {
                              its parent is processed (valid for processed and queued nodes) */
     double *ell;          /* per body: ell_b = sqrt(tr(I_com) / (2 m)) (0 if m <= 0) */
     double lower;         /* lower bound on max_b e(a_b) from the reached leaves */
+    double lower_r;       /* the same less each reached body's estimated rounding (the
+                             rounding estimate's denominator, docs/math.md §10b) */
+    double pl_all, pa_all; /* the largest sum of sigma_lin^2 (sigma_ang^2) over the non-fixed
+                             joints, free ones included, on one body's path to the world */
 };
 
 /* Whether the linkage's metric is a world one (and the data exist). */
@@ -43,5 +47,10 @@ void worldbound_processed(aqs_linkage *L, int32_t n);
 /* The bound E_n on node n's contribution to max_b e(delta a_b), from its
  * total acceleration A(n) (the node's world pose must be set). */
 double worldbound_key(const aqs_linkage *L, int32_t n, double a);
+
+/* What the DCA's rounding adds to abs_world, from r2, the 2-norm of the
+ * estimated errors of every joint's acceleration (computed, free and
+ * uncomputed ones): r2 (sqrt(pl_all) + (2 R_0 + ellmax) sqrt(pa_all)). */
+double worldbound_rounding(const aqs_linkage *L, double r2);
 
 #endif
