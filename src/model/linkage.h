@@ -182,6 +182,7 @@ typedef struct {
     int32_t *heap_item;
     int32_t heap_size;
     double sum;           /* running sum of the queued A values (eps_c^2) */
+    double sum_h;         /* world measures: running sum of the queued nodes' E_h */
     double a_root;        /* A(root) */
     double lower;         /* L: lower bound on max_j ||qdd_j|| */
     int32_t computed;     /* counted joints computed: N_E */

@@ -281,7 +281,8 @@ void rounding_finish(aqs_linkage *L)
         const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq + s->rf_sq)) : INFINITY;
         if (s->metric == AQS_METRIC_ABS_WORLD) tot = T + wr;
         else {
-            tabs = s->all || s->heap_size == 0 ? 0.0 : maxd(s->sum, 0.0); /* sum of the queued E_n */
+            /* the numerator of error_bound: min(sum E_n, top + sum E_h) */
+            tabs = s->all || s->heap_size == 0 ? 0.0 : maxd(fmin(s->sum, top + maxd(s->sum_h, 0.0)), 0.0);
             den = L->wb ? L->wb->lower_r : 0.0;
             if (tabs + wr == 0.0) tot = T;
             else if (den > 0.0) tot = maxd(T, (tabs + wr) / den);

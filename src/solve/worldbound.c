@@ -43,6 +43,7 @@ void worldbound_free(aqs_linkage *L)
     lk_free(L, w->size);
     lk_free(L, w->wpose);
     lk_free(L, w->ell);
+    lk_free(L, w->beyond);
     lk_free(L, w);
     L->wb = NULL;
 }
@@ -158,8 +159,9 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->holds = lk_calloc(L, nn, 1);
     w->wpose = lk_calloc(L, nn, sizeof(pose));
     w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
+    w->beyond = lk_calloc(L, nn, sizeof(double));
     size = w->size = lk_calloc(L, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size) {
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !w->beyond || !size) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -455,11 +457,12 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     return best;
 }
 
-double worldbound_key(const aqs_linkage *L, int32_t n, double a)
+double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond)
 {
     const struct worldbound *w = L->wb;
     const double *s = w->sph + 4 * n;
     double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n], e;
+    *beyond = 0.0;
     if (a <= 0.0) return 0.0;
     /* the bodies inside n: lever arms within n's sphere */
     e = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
@@ -477,6 +480,7 @@ double worldbound_key(const aqs_linkage *L, int32_t n, double a)
             rho = R + vec3_dist(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
             far = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
         }
+        *beyond = far * (1.0 + 1e-12);
         if (far > e) e = far;
     }
     return e * (1.0 + 1e-12);
