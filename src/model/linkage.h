@@ -182,6 +182,7 @@ typedef struct {
     int32_t *heap_item;
     int32_t heap_size;
     double sum;           /* running sum of the queued A values (eps_c^2) */
+    double sum_h;         /* world measures: running sum of the queued nodes' E_h */
     double a_root;        /* A(root) */
     double lower;         /* L: lower bound on max_j ||qdd_j|| */
     int32_t computed;     /* counted joints computed: N_E */
@@ -200,6 +201,7 @@ typedef struct {
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
     /* Rounding estimate of the last solve (src/solve/rounding.c) */
     double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
+    double rf_sq;           /* the same sum over the computed free joints (the world measures) */
     double rk_max;          /* largest relative error level met (units of u) */
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */

@@ -128,10 +128,14 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
 static void push(aqs_linkage *L, heap *h, int32_t n)
 {
     solve_state *s = &L->s;
-    double a = totalacc_eval(L, n);
-    /* the world measures queue by E_n, the node's bound (src/solve/worldbound.c) */
-    double key = worldbound_active(L) ? worldbound_key(L, n, a) : a;
+    double a = totalacc_eval(L, n), key = a;
     const node *nd = &L->t.nodes[n];
+    /* the world measures queue by E_n, the node's bound, and sum its part
+     * beyond held handles E_h (src/solve/worldbound.c) */
+    if (worldbound_active(L)) {
+        key = worldbound_key(L, n, a, &L->wb->beyond[n]);
+        s->sum_h += L->wb->beyond[n];
+    }
     s->aval[n] = a;
     heap_push(h, key, n);
     s->sum += key;
@@ -141,6 +145,16 @@ static void push(aqs_linkage *L, heap *h, int32_t n)
     }
 }
 
+/* The world measures' bound on max_b e_b (docs/math.md §10b, "Summing over
+ * the queued nodes"): a body lies inside at most one queued node and beyond
+ * held handles of any number, so max_b e_b <= max_n E_in + sum_n E_h <= top +
+ * sum_h; and <= sum_n E_n. */
+static double world_sum(const aqs_linkage *L, double sum, double top)
+{
+    const double sh = L->s.sum_h > 0.0 ? L->s.sum_h : 0.0, alt = top + sh;
+    return alt < sum ? alt : sum;
+}
+
 /* The certified bound for the state of the queue (sum: eps_c^2; top: the
  * largest queued A). */
 static double bound_of(const aqs_linkage *L, double sum, double top)
@@ -148,8 +162,8 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     const solve_state *s = &L->s;
     switch (s->metric) {
     case AQS_METRIC_ABS_LINKAGE: return sqrt(sum);
-    case AQS_METRIC_ABS_WORLD: return sum; /* sum of the queued E_n */
-    case AQS_METRIC_REL_WORLD: return sum > 0.0 ? sum / (L->wb ? L->wb->lower : 0.0) : 0.0;
+    case AQS_METRIC_ABS_WORLD: return world_sum(L, sum, top);
+    case AQS_METRIC_REL_WORLD: return sum > 0.0 ? world_sum(L, sum, top) / (L->wb ? L->wb->lower : 0.0) : 0.0;
     case AQS_METRIC_REL_LINKAGE: {
         /* A(root) = the computed joints' squares + the queued A (every joint
          * is in one or the other): used when the root's T was not updated */
@@ -165,17 +179,26 @@ static double bound_of(const aqs_linkage *L, double sum, double top)
     }
 }
 
-/* Neumaier-compensated sum of the queued values. */
-static double resum(const heap *h)
+/* Neumaier-compensated sum of the queued values (per: a per-node value
+ * instead of the keys, e.g. the world measures' E_h). */
+static double resum_of(const heap *h, const double *per)
 {
     double sum = 0.0, c = 0.0;
     int32_t i;
     for (i = 0; i < h->size; i++) {
-        double v = h->key[i], t = sum + v;
+        double v = per ? per[h->item[i]] : h->key[i], t = sum + v;
         c += fabs(sum) >= fabs(v) ? (sum - t) + v : (v - t) + sum;
         sum = t;
     }
     return sum + c;
+}
+
+/* Re-sum the running sums (they drift). */
+static void resum(aqs_linkage *L, const heap *h)
+{
+    solve_state *s = &L->s;
+    s->sum = resum_of(h, NULL);
+    if (worldbound_active(L)) s->sum_h = resum_of(h, L->wb->beyond);
 }
 
 /* ------------------------------------------------------------ prediction
@@ -251,7 +274,7 @@ static void predict_next(aqs_linkage *L, double eps)
     for (i = 0; i < s->nprocessed; i++) {
         int32_t n = s->processed[i], p = t->nodes[n].parent;
         /* the world measures compare E_n^2 (its key, squared) */
-        double key = worldbound_active(L) ? worldbound_key(L, n, s->aval[n]) : 0.0;
+        double far, key = worldbound_active(L) ? worldbound_key(L, n, s->aval[n], &far) : 0.0;
         if (worldbound_active(L)) key *= key;
         else key = s->aval[n];
         if ((p < 0 || (s->pred[p] & 2)) && (t->nodes[n].forced || key >= thr)) s->pred[n] |= 2;
@@ -272,6 +295,7 @@ static void run(aqs_linkage *L, heap *h, double eps)
         double top = heap_top(h), a;
         int32_t n, kids[2], nk, i;
         if (s->sum < 0.0) s->sum = 0.0; /* rounding of the running sum (§6.4) */
+        if (s->sum_h < 0.0) s->sum_h = 0.0;
         s->bound = bound_of(L, s->sum, top);
         if (h->size == 0) {
             s->bound = 0.0;
@@ -279,18 +303,19 @@ static void run(aqs_linkage *L, heap *h, double eps)
         }
         if (s->bound <= eps) {
             /* Accept only after re-summing the queue (the running sum drifts). */
-            s->sum = resum(h);
+            resum(L, h);
             s->bound = bound_of(L, s->sum, top);
             if (s->bound <= eps) break;
         }
         if (s->max_computed > 0 && s->computed >= s->max_computed) {
             s->capped = 1;
-            s->sum = resum(h);
+            resum(L, h);
             s->bound = bound_of(L, s->sum, top);
             break;
         }
         heap_pop(h, &a, &n);
         s->sum -= a;
+        if (worldbound_active(L)) s->sum_h -= L->wb->beyond[n];
         nk = process(L, n, kids);
         for (i = 0; i < nk; i++) push(L, h, kids[i]);
     }
@@ -313,7 +338,7 @@ void adaptive_mark_exact(aqs_linkage *L)
     solve_state *s = &L->s;
     s->nprocessed = s->nreached = s->computed = 0;
     s->tracked = 1;
-    s->lower = s->sum = 0.0;
+    s->lower = s->sum = s->sum_h = 0.0;
     s->capped = 0;
     finish_exact(L);
     rounding_none(L);
@@ -327,7 +352,7 @@ void adaptive_solve(aqs_linkage *L)
     reset_outputs(L);
     s->lower = 0.0;
     s->capped = 0;
-    s->sum = 0.0;
+    s->sum = s->sum_h = 0.0;
     s->comp_sq = 0.0;
     s->npredicted = 0;
     rounding_solve_start(L);
@@ -341,6 +366,7 @@ void adaptive_solve(aqs_linkage *L)
     }
     if (s->eps == 0.0 && s->max_computed == 0) {
         /* Exact: every node, parents before children (descending index). */
+        if (worldbound_active(L)) worldbound_begin(L); /* world poses and L_w, for the rounding estimate */
         for (n = t->nnodes - 1; n >= 0; n--)
             if (t->nodes[n].joint >= 0) process(L, n, kids);
         finish_exact(L);

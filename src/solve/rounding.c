@@ -31,6 +31,8 @@
 
 #include <math.h>
 
+#include "worldbound.h"
+
 /* A node's levels in tree.rnd_node (5 per node). */
 enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
 #define RN(t, nd) ((t)->rnd_node + 5 * ((nd) - (t)->nodes))
@@ -164,7 +166,7 @@ void rounding_solve_start(aqs_linkage *L)
 {
     solve_state *s = &L->s;
     tree *t = &L->t;
-    s->rc_sq = s->rc_max = s->rk_max = 0.0;
+    s->rc_sq = s->rc_max = s->rk_max = s->rf_sq = 0.0;
     s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
@@ -249,7 +251,8 @@ void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
     if (counted) {
         s->rc_sq += e * e;
         s->rc_max = maxd(s->rc_max, e);
-    }
+    } else
+        s->rf_sq += e * e; /* a free joint: moves its bodies (world measures) */
 }
 
 void rounding_finish(aqs_linkage *L)
@@ -282,11 +285,23 @@ void rounding_finish(aqs_linkage *L)
     case AQS_METRIC_ABS_LINKAGE: tot = T + r2; break;
     case AQS_METRIC_ABS_JOINT: tot = T + rmax; break;
     case AQS_METRIC_ABS_WORLD:
-    case AQS_METRIC_REL_WORLD:
-        /* not estimated for the world measures (the joint errors are not
-         * carried to the bodies): no honest bound, certified = 0 */
-        tot = INFINITY;
+    case AQS_METRIC_REL_WORLD: {
+        /* every joint's estimated error (free ones too: they move bodies)
+         * carried to the bodies along their paths (worldbound_rounding);
+         * rel_world divides by the reached bodies' accelerations less their
+         * own estimated errors (docs/math.md §10b, "Rounding") */
+        const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq + s->rf_sq)) : INFINITY;
+        if (s->metric == AQS_METRIC_ABS_WORLD) tot = T + wr;
+        else {
+            /* the numerator of error_bound: min(sum E_n, top + sum E_h) */
+            tabs = s->all || s->heap_size == 0 ? 0.0 : maxd(fmin(s->sum, top + maxd(s->sum_h, 0.0)), 0.0);
+            den = L->wb ? L->wb->lower_r : 0.0;
+            if (tabs + wr == 0.0) tot = T;
+            else if (den > 0.0) tot = maxd(T, (tabs + wr) / den);
+            else tot = INFINITY;
+        }
         break;
+    }
     case AQS_METRIC_REL_LINKAGE:
         /* ||ref_all|| >= sqrt(A(root)) - r2 */
         tabs = s->all || s->heap_size == 0 ? 0.0 : sqrt(s->sum > 0.0 ? s->sum : 0.0);

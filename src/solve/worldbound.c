@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "dense.h"
+#include "rounding.h"
 
 /* handles of a node for which the bound beyond held handles is evaluated
  * (larger nodes fall back to the spheres) */
@@ -42,6 +43,7 @@ void worldbound_free(aqs_linkage *L)
     lk_free(L, w->size);
     lk_free(L, w->wpose);
     lk_free(L, w->ell);
+    lk_free(L, w->beyond);
     lk_free(L, w);
     L->wb = NULL;
 }
@@ -102,6 +104,42 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
     s[3] = r * (1.0 + 1e-12);
 }
 
+/* pl_all, pa_all: the largest sums of sigma_lin^2, sigma_ang^2 over the
+ * non-fixed joints (free ones included) on one composite's path to the
+ * world, in body order (parents first): the lever sums of the rounding
+ * estimate (worldbound_rounding). */
+static aqs_status all_paths(aqs_linkage *L, const char *fn)
+{
+    struct worldbound *w = L->wb;
+    const model *m = &L->m;
+    double *pl = lk_calloc(L, 2 * ((size_t)m->ncomp + 1), sizeof(double)), *pa;
+    int32_t i;
+    if (!pl) {
+        worldbound_free(L);
+        return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
+    }
+    pa = pl + m->ncomp + 1;
+    w->pl_all = w->pa_all = 0.0;
+    for (i = 0; i < L->nbodies; i++) {
+        const int32_t e = m->eff_of_joint[m->parent_joint[m->order[i]]];
+        const joint_def *jd;
+        double S[36] = {0};
+        int32_t c, p, d;
+        if (e < 0) continue; /* welded to its parent: the same composite */
+        jd = &L->joints[m->eff_joint[e]];
+        c = m->eff_child[e];
+        p = m->eff_parent[e];
+        d = joint_nv(jd->type);
+        joint_subspace(jd, L->q + jd->qoff, S);
+        pl[c] = pl[p] + sigma_rows(S, d, 3) * sigma_rows(S, d, 3);
+        pa[c] = pa[p] + sigma_rows(S, d, 0) * sigma_rows(S, d, 0);
+        w->pl_all = fmax(w->pl_all, pl[c]);
+        w->pa_all = fmax(w->pa_all, pa[c]);
+    }
+    lk_free(L, pl);
+    return AQS_OK;
+}
+
 aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
 {
     tree *t = &L->t;
@@ -121,8 +159,9 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->holds = lk_calloc(L, nn, 1);
     w->wpose = lk_calloc(L, nn, sizeof(pose));
     w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
+    w->beyond = lk_calloc(L, nn, sizeof(double));
     size = w->size = lk_calloc(L, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size) {
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !w->beyond || !size) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -176,6 +215,7 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
             }
         }
     }
+    if (all_paths(L, fn) != AQS_OK) return AQS_ENOMEM;
     /* holds[n]: a handle e of n whose child composite lies outside n's
      * subtree, i.e. n holds e up and what hangs beyond it moves with n's
      * joints. n's subtree is the index range (n - size[n], n]. */
@@ -217,25 +257,39 @@ void worldbound_begin(aqs_linkage *L)
 {
     struct worldbound *w = L->wb;
     if (L->t.nnodes > 0) pose_identity(&w->wpose[L->t.root]);
-    w->lower = 0.0;
+    w->lower = w->lower_r = 0.0;
+}
+
+static double n6(const double *v)
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
 }
 
 /* Composite c's exact spatial acceleration minus g (its frame) from its
- * leaf's handle forces: Newton's law, as dca.c's comp_acceleration. */
-static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6])
+ * leaf's handle forces: Newton's law, as dca.c's comp_acceleration. *err:
+ * the estimated error (2-norm) of a from the handle forces' estimated errors
+ * (tree.rnd_x, carried by X_h^T: |X_h^T v| <= (1 + |p_h|) |v|) and the
+ * products' rounding; the inverse inertia is data, as for the leaf
+ * coefficients (docs/math.md §10a). +inf without the estimate's storage. */
+static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6], double *err)
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[leaf];
     const pose *P = t->poses + nd->poses;
-    const double *x = t->data + nd_xf(nd);
-    double f[6], tmp[6];
+    const double *x = t->data + nd_xf(nd), *Ii = L->m.comp_inverse + 36 * nd->comp;
+    double f[6], tmp[6], ef = 0.0, mag, ni = 0.0;
     int32_t h, i;
     memcpy(f, L->m.comp_force + 6 * nd->comp, sizeof f);
+    mag = n6(f);
     for (h = 0; h < nd->nh; h++) {
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
+        mag += n6(tmp);
+        if (t->rnd_x) ef += (1.0 + sqrt(vec3_dot(P[h].p, P[h].p))) * t->rnd_x[nd->handles + h];
     }
-    dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, a, 6, 6);
+    dense_matvec(Ii, f, a, 6, 6);
+    for (i = 0; i < 36; i++) ni += Ii[i] * Ii[i];
+    *err = t->rnd_x ? sqrt(ni) * (ef + RND_SAFETY * RND_U * 16.0 * mag) : INFINITY;
 }
 
 /* The reached leaf's bodies: their accelerations are exact (the leaf's
@@ -246,9 +300,9 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
     struct worldbound *w = L->wb;
     const model *m = &L->m;
     int32_t c = L->t.nodes[leaf].comp, k;
-    double a[6], g[3];
+    double a[6], g[3], ea;
     if (c == m->ncomp) return;
-    comp_accel(L, leaf, a);
+    comp_accel(L, leaf, a, &ea);
     mat3_tvec(w->wpose[leaf].R, L->gravity, g);
     a[3] += g[0];
     a[4] += g[1];
@@ -267,6 +321,9 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
         e = sqrt(vec3_dot(al, al)) + w->ell[b] * sqrt(vec3_dot(a, a));
         e *= 1.0 - 1e-12; /* the rounding of these few operations */
         if (e > w->lower) w->lower = e;
+        /* |delta a_lin + delta alpha x r| + ell |delta alpha| <= |delta a| (1 + |r| + ell) */
+        e -= ea * (1.0 + sqrt(vec3_dot(r, r)) + w->ell[b]);
+        if (e > w->lower_r) w->lower_r = e;
     }
 }
 
@@ -400,11 +457,12 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     return best;
 }
 
-double worldbound_key(const aqs_linkage *L, int32_t n, double a)
+double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond)
 {
     const struct worldbound *w = L->wb;
     const double *s = w->sph + 4 * n;
     double R = s[3] > 0.0 ? s[3] : 0.0, rho = 2.0 * R + w->lmax[n], e;
+    *beyond = 0.0;
     if (a <= 0.0) return 0.0;
     /* the bodies inside n: lever arms within n's sphere */
     e = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
@@ -422,7 +480,20 @@ double worldbound_key(const aqs_linkage *L, int32_t n, double a)
             rho = R + vec3_dist(c, s0) + (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
             far = sqrt(a) * (sqrt(w->sl2[n]) + rho * sqrt(w->sa2[n]));
         }
+        *beyond = far * (1.0 + 1e-12);
         if (far > e) e = far;
     }
     return e * (1.0 + 1e-12);
+}
+
+double worldbound_rounding(const aqs_linkage *L, double r2)
+{
+    /* Body b's part: sum over the joints j on its path of e_j (sigma_lin_j +
+     * sigma_ang_j (|p_b - o_j| + ell_b)), and p_b, o_j lie in the root's
+     * sphere; Cauchy-Schwarz on the path, Minkowski, and the path's e_j^2
+     * summed at most to r2^2 (docs/math.md §10b, "Rounding"). */
+    const struct worldbound *w = L->wb;
+    const double *s0 = w->sph + 4 * L->t.root;
+    const double lever = 2.0 * (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
+    return r2 * (sqrt(w->pl_all) + lever * sqrt(w->pa_all)) * (1.0 + 1e-12);
 }

@@ -23,7 +23,12 @@ struct worldbound {
     pose *wpose;          /* per node: world pose of its frame (root: identity), set when
                              its parent is processed (valid for processed and queued nodes) */
     double *ell;          /* per body: ell_b = sqrt(tr(I_com) / (2 m)) (0 if m <= 0) */
+    double *beyond;       /* per node: its E_h when it was last queued (0: holds nothing) */
     double lower;         /* lower bound on max_b e(a_b) from the reached leaves */
+    double lower_r;       /* the same less each reached body's estimated rounding (the
+                             rounding estimate's denominator, docs/math.md §10b) */
+    double pl_all, pa_all; /* the largest sum of sigma_lin^2 (sigma_ang^2) over the non-fixed
+                             joints, free ones included, on one body's path to the world */
 };
 
 /* Whether the linkage's metric is a world one (and the data exist). */
@@ -40,8 +45,16 @@ void worldbound_begin(aqs_linkage *L);
 /* Node n was back-substituted: its children's world poses, and the exact
  * accelerations of its leaf children raise the lower bound. */
 void worldbound_processed(aqs_linkage *L, int32_t n);
-/* The bound E_n on node n's contribution to max_b e(delta a_b), from its
- * total acceleration A(n) (the node's world pose must be set). */
-double worldbound_key(const aqs_linkage *L, int32_t n, double a);
+/* The bound E_n = max(E_in, E_h) on node n's contribution to max_b
+ * e(delta a_b), from its total acceleration A(n) (the node's world pose must
+ * be set). *beyond: E_h, the part for the bodies beyond the handles n holds
+ * up (0 when it holds none): the solve's bound is also at most the largest
+ * queued E_n plus the sum of the queued E_h (docs/math.md §10b). */
+double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond);
+
+/* What the DCA's rounding adds to abs_world, from r2, the 2-norm of the
+ * estimated errors of every joint's acceleration (computed, free and
+ * uncomputed ones): r2 (sqrt(pl_all) + (2 R_0 + ellmax) sqrt(pa_all)). */
+double worldbound_rounding(const aqs_linkage *L, double r2);
 
 #endif

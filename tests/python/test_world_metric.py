@@ -108,18 +108,27 @@ def test_bound_holds(metric, seed, n, chain):
 
 
 @pytest.mark.parametrize("metric", ["abs_world", "rel_world"])
-def test_world_measures_are_not_certified_for_rounding(metric):
-    """The rounding estimate (SolveStats.rounding_bound, certified) covers the
-    joint measures only: a world measure reports rounding_bound = inf and
-    certified = False, never a certificate it does not have; the same
-    linkage under a joint measure is certified (a benign random tree)."""
-    L, _, _ = build(3, 40)
+def test_world_measures_rounding_estimate(metric):
+    """The rounding estimate covers the world measures (docs/math.md 10b,
+    "Rounding"): on a benign random tree the solve is certified, with a finite
+    rounding_bound <= eps, and error_bound + rounding_bound bounds the error
+    measured by finite differences against the exact DCA; at an eps below
+    the estimate (2^-50) it is not certified."""
+    L, coms, ells = build(3, 40)
     with L:
         L.set_auto(False)
+        L.set_tolerance(metric, 0.0)
+        exact = L.solve() and L.accelerations()
+        scale = world_measure(L, coms, ells, exact)
         L.set_tolerance(metric, 2.0 ** -10)
         s = L.solve()
         assert s.metric == metric
-        assert math.isinf(s.rounding_bound) and s.certified is False
-        L.set_tolerance("rel_joint", 2.0 ** -10)
+        assert s.certified is True and math.isfinite(s.rounding_bound) and 0 < s.rounding_bound <= 2.0 ** -10
+        err = world_measure(L, coms, ells, exact - L.accelerations())
+        if metric == "rel_world":
+            err /= scale
+        slack = 1e-6 * (1.0 if metric == "rel_world" else scale)  # central differences
+        assert err <= (s.error_bound + s.rounding_bound) * (1 + 1e-9) + slack
+        L.set_tolerance(metric, 2.0 ** -50)
         s = L.solve()
-        assert s.certified is True and s.rounding_bound <= 2.0 ** -10
+        assert s.certified is False and s.rounding_bound > 2.0 ** -50
