@@ -182,7 +182,7 @@ aqs_status model_inverse_alloc(aqs_linkage *L)
     model *m = &L->m;
     int32_t c;
     if (m->comp_inverse) return AQS_OK;
-    m->comp_inverse = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    m->comp_inverse = lk_calloc_in(L, LK_MEM_DCA, (size_t)m->ncomp + 1, 36 * sizeof(double));
     if (!m->comp_inverse) return AQS_ENOMEM;
     for (c = 0; c < m->ncomp; c++) {
         double I[36];
