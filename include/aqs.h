@@ -225,7 +225,7 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *linkage, int32_
  *  caller sets size = sizeof(aqs_memory_stats); the library fills only the
  *  fields that size covers (as for aqs_solve_stats). Bytes are those asked
  *  of the allocator (aqs_linkage_create_with_allocator's alloc sees the same
- *  sizes), each block's 16-byte header and the handle included; the
+ *  sizes), each block's header (16 bytes on common platforms) and the handle included; the
  *  categories add up to bytes. */
 typedef struct aqs_memory_stats {
     uint32_t size;      /**< set by the caller: sizeof(aqs_memory_stats) */

@@ -9,7 +9,8 @@
 /* The header in front of every block: its size as requested from the
  * allocator and its category. The union keeps what follows aligned as the
  * allocator's blocks are (any C type: its size is a multiple of the
- * strictest alignment among these members). */
+ * strictest alignment among its members, which are there for that); 16 bytes
+ * where no type needs more (aqs.h, aqs_memory_stats). */
 typedef union {
     struct {
         size_t bytes;
@@ -19,6 +20,7 @@ typedef union {
     double d;
     void *p;
     int64_t i;
+    unsigned char size16[16];
 } block_header;
 
 size_t lk_block_bytes(size_t bytes)

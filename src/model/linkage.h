@@ -142,7 +142,8 @@ typedef struct {
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
     double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
                                finalize (kin_comp_inertia has it, packed) */
-    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc */
+    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc (read through
+                               model_inverse_apply, which computes it when not held) */
     double *comp_force;     /* (ncomp + 1) x 6: external load, composite frame */
     unsigned char *comp_loaded; /* ncomp + 1 */
     int32_t *loaded_comps;  /* comps whose comp_force is non-zero */

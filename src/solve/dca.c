@@ -40,7 +40,8 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
         if (!s->heap_key || !s->heap_item || !s->pred || !s->tstale || !s->aval || !s->plist)
             return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the adaptive solver", fn);
     }
-    if (frames_poses_alloc(L) != AQS_OK || model_inverse_alloc(L) != AQS_OK) /* read below */
+    if (frames_poses_alloc(L) != AQS_OK ||
+        (L->dca_form == AQS_DCA_FORM_PHI && model_inverse_alloc(L) != AQS_OK)) /* dca_phi_leaf's Phi */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
     t->data = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
@@ -89,7 +90,7 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         /* acc = I^-1 f = Y (Y^T f), through the centre of mass (the square-root
          * form's mass properties); the inverse-inertia form keeps finalize's */
         if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd_ic(nd), Y) != 0) {
-            dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, acc, 6, 6);
+            model_inverse_apply(L, nd->comp, f, acc);
         } else {
             dense_tmatvec6(Y, f, w);
             dense_matvec6(Y, w, acc);
@@ -502,7 +503,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
-    const int32_t ldA = A->lld, ldB = B->lld, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
+    /* Lambda's row stride (node.lld) is its rank: the structural rank layout() gave it */
+    const int32_t ldA = rA, ldB = rB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
      * the children's join blocks (A's handle ka, B's kb) use only their first
      * jw columns, so the constraint and relative rows span the first w columns
@@ -734,7 +736,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
     for (r = 0; r < orows; r++)
-        memcpy(LC + (int64_t)r * C->lld, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
+        memcpy(LC + (int64_t)r * rank, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
     C->rank = rank;
     return 0;
 }
@@ -847,7 +849,7 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, const double *x, 
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
     }
-    dense_matvec(L->m.comp_inverse + 36 * c, f, a, 6, 6);
+    model_inverse_apply(L, c, f, a);
 }
 
 /* Newton's law on each welded subtree S hanging from fixed joint j:

@@ -126,7 +126,9 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
-    AQS_ASSERT(nd->rank <= nd->lld); /* Lambda fit the structural rank layout() gave it room for */
+    /* Lambda is stored at its rank, with row stride rank: the structural rank layout()
+     * gave it room for (the inverse-inertia form keeps Phi, lld = 6nh) */
+    AQS_ASSERT(L->dca_form == AQS_DCA_FORM_PHI ? nd->lld == 6 * nd->nh : nd->rank == nd->lld);
     if (L->wb) worldbound_node_update(L, n); /* its bodies' sphere */
     if (L->t.tdata) {
         solve_state *s = &L->s;

@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "dense.h"
+#include "model.h"
 
 /* handles of a node for which the bound beyond held handles is evaluated
  * (larger nodes fall back to the spheres) */
@@ -122,7 +123,9 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->wpose = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(pose));
     w->ell = lk_calloc_in(L, LK_MEM_WORLD, (size_t)L->nbodies + 1, sizeof(double));
     size = w->size = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size) {
+    /* the reached leaves' accelerations (comp_accel) need the inverse inertias */
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !size ||
+        model_inverse_alloc(L) != AQS_OK) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
@@ -235,7 +238,7 @@ static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6])
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
     }
-    dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, a, 6, 6);
+    model_inverse_apply(L, nd->comp, f, a); /* held: worldbound_enable */
 }
 
 /* The reached leaf's bodies: their accelerations are exact (the leaf's
