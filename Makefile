@@ -345,10 +345,20 @@ bench: $(AQS_BENCH)
 	@$(MAKE) --no-print-directory bench-plots BENCH_SET=$(BENCH_SET)
 	@$(MAKE) --no-print-directory bench-collide
 
-# Scaling: molecule 10k..1M joints, N_f = 1, rel. joint 2^-19 (1M: ~12 GB, ~3 min).
+# Scaling (docs/bench.md, "Scaling"): first the exact pass per joint with the sizes
+# interleaved in one process, and memory per joint through aqs_linkage_get_memory, exact
+# and with a tolerance (exact_main --memory: the molecule at SCALING_EXACT_SIZES, the
+# millipede; ~6 GB at 10^6), into docs/bench/scaling-exact.txt with the load; then the
+# adaptive step per size, molecule 10k..1M joints, N_f = 1, rel. joint 2^-19, one
+# process per size (aqs-bench; 1M: ~6 GB). ~5 min.
 SCALING_SIZES ?= 10000 50000 200000 1000000
-bench-scaling: $(AQS_BENCH)
+SCALING_EXACT_SIZES ?= 2000,50000,1000000
+bench-scaling: $(AQS_BENCH) $(BUILD)/bench/exact_main
 	@mkdir -p docs/bench
+	@set -e; { date -u +"run %Y-%m-%dT%H:%M:%SZ"; uptime; \
+	    $(BUILD)/bench/exact_main --sizes $(SCALING_EXACT_SIZES) --rounds 7 --reps 3 --memory; \
+	    $(BUILD)/bench/exact_main --scene millipede --sizes 13000 --rounds 3 --reps 3 --memory; \
+	    $(BUILD)/bench/exact_main --bandwidth 1000; uptime; } | tee docs/bench/scaling-exact.txt
 	@rm -f docs/bench/scaling.jsonl
 	@set -e; for n in $(SCALING_SIZES); do \
 	    $(AQS_BENCH) --scene molecule --joints $$n --forces 1 --eps 2^-19 --steps 20 \

@@ -81,7 +81,8 @@ typedef struct bench_state {
     int32_t bodies, joints, nq, nv;
     int32_t tree_nodes, tree_height, max_handles;
     double mean_handles, build_s, finalize_s;
-    long exact_bytes, adaptive_bytes;
+    long exact_bytes, adaptive_bytes; /* held (aqs_linkage_get_memory) */
+    long exact_rss, adaptive_rss;     /* growth of the resident set */
     double *q0, *com_local, *com0, *com_now, *poses, *disp_ref, *qdd;
     double *ck_ref;  /* the exact run's centres of mass at the checkpoint steps */
     int32_t *ck_step; /* checkpoint i is after step ck_step[i] (increasing, the last is K) */
@@ -911,6 +912,7 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             "\"displacement_error_per_step\":%.9g,\"displacement_error_mean\":%.9g,"
             "\"displacement_checkpoints\":%d,"
             "\"exact_linkage_bytes\":%ld,\"adaptive_linkage_bytes\":%ld,"
+            "\"exact_rss_bytes\":%ld,\"adaptive_rss_bytes\":%ld,"
             "\"peak_rss_bytes\":%ld,\"loadavg1\":%.2f,\"fallback\":%.9g,\"fallback_steps\":%d,"
             "\"prediction\":%.9g,\"nodes_predicted\":%.4f,\"factors_updated\":%.4f,"
             "\"ratio_R_aba\":%.9g,\"dca_form\":\"%s\",\"auto\":%s,\"auto_exact_steps\":%d,"
@@ -919,7 +921,7 @@ static void write_json(bench_state *b, int32_t nf, int ei, double dt, const benc
             1e3 * exact_ms / b->joints, dca_ms, ref_ms, 1e3 * t_node, exact_ms / ms, dca_ms / ms, r->mean_ne, (int)r->max_ne, r->mean_nu,
             r->mean_np, r->max_bound, ms / denom, r->disp_err, r->max_disp,
             r->disp_err / o->steps, r->disp_mean, (int)b->nck, b->exact_bytes,
-            b->adaptive_bytes, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
+            b->adaptive_bytes, b->exact_rss, b->adaptive_rss, kb < 0 ? -1L : 1024L * kb, loadavg1(), o->fallback, (int)r->fallback_steps,
             o->prediction, r->mean_npred, r->mean_nf, ms / denom_aba,
             o->dca_form == AQS_DCA_FORM_PHI ? "phi" : "sqrt", o->autopath ? "true" : "false",
             (int)r->auto_exact_steps, r->mean_cost_ad, r->mean_cost_ex);
@@ -948,6 +950,15 @@ static void print_row(bench_state *b, int32_t nf, int ei, const bench_run *r, do
            (int)nf, eps, (int)r->steps, ms, exact_ms, exact_ms / ms, dca_ms, dca_ms / ms, r->mean_ne,
            r->mean_nu, ms / denom, r->disp_err, r->disp_err / r->steps, r->disp_mean, r->max_bound);
     fflush(stdout);
+}
+
+/* Bytes a linkage holds by its own count. */
+static long linkage_bytes(const aqs_linkage *L)
+{
+    aqs_memory_stats m;
+    memset(&m, 0, sizeof m);
+    m.size = sizeof m;
+    return aqs_linkage_get_memory(L, &m) == AQS_OK ? (long)m.bytes : -1L;
 }
 
 static int setup(bench_state *b)
@@ -1026,8 +1037,11 @@ static int setup(bench_state *b)
         return 1;
     }
     /* Memory of one exact linkage (built, finalized, solved once), then of
-     * one adaptive linkage once its total-acceleration factors exist. */
-    b->exact_bytes = bench_current_rss_bytes() - rss0;
+     * one adaptive linkage once its total-acceleration factors exist: what
+     * each holds by its own count (aqs_linkage_get_memory), and the growth of
+     * the resident set. */
+    b->exact_bytes = linkage_bytes(b->exact);
+    b->exact_rss = bench_current_rss_bytes() - rss0;
     rss0 = bench_current_rss_bytes();
     if (failed(aqs_linkage_create(&b->adapt), NULL, "aqs_linkage_create") ||
         failed(aqs_linkage_set_dca_form(b->adapt, o->dca_form), b->adapt, "aqs_linkage_set_dca_form") ||
@@ -1038,16 +1052,19 @@ static int setup(bench_state *b)
         reset(b, b->adapt, 1) != 0) {
         return 1;
     }
-    b->adaptive_bytes = bench_current_rss_bytes() - rss0;
+    b->adaptive_bytes = linkage_bytes(b->adapt);
+    b->adaptive_rss = bench_current_rss_bytes() - rss0;
     printf("scene %s: %d bodies, %d joints (nq %d, nv %d); built in %.3f s, finalized in "
            "%.3f s\n"
            "assembly tree: %d nodes, height %d (log2 N = %.1f), handles per node mean %.2f "
            "max %d\n"
-           "memory: exact linkage %.0f B/joint, adaptive linkage %.0f B/joint (resident)\n",
+           "memory: exact linkage %.0f B/joint, adaptive linkage %.0f B/joint (held, "
+           "aqs_linkage_get_memory; resident growth %.0f and %.0f)\n",
            bench_scene_name(kind), (int)b->bodies, (int)b->joints, (int)b->nq, (int)b->nv,
            b->build_s, b->finalize_s, (int)b->tree_nodes, (int)b->tree_height,
            log((double)b->joints) / log(2.0), b->mean_handles, (int)b->max_handles,
-           (double)b->exact_bytes / b->joints, (double)b->adaptive_bytes / b->joints);
+           (double)b->exact_bytes / b->joints, (double)b->adaptive_bytes / b->joints,
+           (double)b->exact_rss / b->joints, (double)b->adaptive_rss / b->joints);
     return 0;
 }
 

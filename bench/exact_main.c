@@ -5,7 +5,7 @@
  * process, and the memory each linkage holds (counted by its allocator).
  *
  *   exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K]
- *              [--gravity] [--tolerance]
+ *              [--gravity] [--tolerance] [--memory]
  *   exact_main --bandwidth MB
  *
  * Each linkage gets one force (1 N at the centre of mass of a seeded body,
@@ -14,10 +14,13 @@
  * solves. A round times K passes of each size in turn; the figure per size is
  * the median over rounds of each round's median pass, divided by the joints.
  * The ratio column is the time per joint against the first size's, in the
- * same run. "B/joint" is what the linkage's allocator holds after the first
- * solve (peak and current), divided by the joints; --tolerance sets rel_joint
- * 2^-19 on the linkages first (the adaptive solver's storage) but still
- * solves exactly by aqs_linkage_set_tolerance(..., 0) after.
+ * same run. "B/joint" is what the linkage holds after the first solve (peak
+ * and current; aqs_linkage_get_memory, checked against a counting allocator),
+ * divided by the joints; --tolerance sets rel_joint 2^-19 on the linkages
+ * first (the adaptive solver's storage) but still solves exactly by
+ * aqs_linkage_set_tolerance(..., 0) after. --memory: after the timed rounds,
+ * each linkage gets rel_joint 2^-19 and one solve, and its memory per joint is
+ * printed exact and with the tolerance, by category (make bench-scaling).
  *
  * --bandwidth MB: the single-core streaming read bandwidth, the floor of a
  * pass over memory: MB megabytes of doubles summed with 4 accumulators, 7
@@ -80,6 +83,19 @@ __attribute__((noinline)) int bench_exact_pass(aqs_linkage *L, const double *q, 
 {
     if (aqs_linkage_set_positions(L, q, nq) != AQS_OK) return 1;
     return aqs_linkage_solve(L) != AQS_OK;
+}
+
+/* What the linkage holds by its own count; a mismatch with the counting
+ * allocator (which sees every request) is an error of the count. */
+static aqs_memory_stats memory(const item *it)
+{
+    aqs_memory_stats m;
+    memset(&m, 0, sizeof m);
+    m.size = sizeof m;
+    if (aqs_linkage_get_memory(it->L, &m) != AQS_OK || m.bytes != it->mem.now || m.peak != it->mem.peak)
+        fprintf(stderr, "exact_main: aqs_linkage_get_memory (%llu, peak %llu) differs from the allocator's count (%zu, peak %zu)\n",
+                (unsigned long long)m.bytes, (unsigned long long)m.peak, it->mem.now, it->mem.peak);
+    return m;
 }
 
 static int fail(aqs_linkage *L, const char *what)
@@ -157,7 +173,7 @@ static int bandwidth(long mb)
 
 int main(int argc, char **argv)
 {
-    int scene = BENCH_SCENE_MOLECULE, rounds = 5, reps = 5, gravity = 0, tolerance = 0;
+    int scene = BENCH_SCENE_MOLECULE, rounds = 5, reps = 5, gravity = 0, tolerance = 0, mem_report = 0;
     int nsizes = 0, a, r, s, k;
     int32_t sizes[MAX_SIZES];
     item items[MAX_SIZES];
@@ -182,8 +198,10 @@ int main(int argc, char **argv)
             gravity = 1;
         } else if (!strcmp(argv[a], "--tolerance")) {
             tolerance = 1;
+        } else if (!strcmp(argv[a], "--memory")) {
+            mem_report = 1;
         } else {
-            fprintf(stderr, "usage: exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K] [--gravity] [--tolerance]\n");
+            fprintf(stderr, "usage: exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K] [--gravity] [--tolerance] [--memory]\n");
             return 2;
         }
     }
@@ -216,6 +234,7 @@ int main(int argc, char **argv)
         double base = 0.0;
         for (s = 0; s < nsizes; s++) {
             item *it = &items[s];
+            aqs_memory_stats m = memory(it);
             double lo = it->round_ns[0], hi = it->round_ns[0], med;
             for (r = 0; r < rounds; r++) {
                 lo = it->round_ns[r] < lo ? it->round_ns[r] : lo;
@@ -224,8 +243,27 @@ int main(int argc, char **argv)
             med = bench_median(it->round_ns, (size_t)rounds) / it->joints;
             if (s == 0) base = med;
             printf("%10d %12.3f %10.1f %6.0f-%-7.0f %8.2f %12.0f %12.0f\n", (int)it->joints, med * it->joints * 1e-6,
-                   med, lo / it->joints, hi / it->joints, med / base, (double)it->mem.now / it->joints,
-                   (double)it->mem.peak / it->joints);
+                   med, lo / it->joints, hi / it->joints, med / base, (double)m.bytes / it->joints,
+                   (double)m.peak / it->joints);
+        }
+    }
+    if (mem_report) {
+        /* B/joint held: exact (as timed), then with rel_joint 2^-19 after one
+         * solve, by category (aqs_memory_stats) */
+        printf("memory per joint (aqs_linkage_get_memory), exact and with rel_joint 2^-19 after one solve\n");
+        printf("%10s %10s %10s %10s | %8s %8s %8s %8s %8s %8s\n", "joints", "exact", "tolerance", "peak", "model",
+               "tree", "exact", "dca", "factors", "other");
+        for (s = 0; s < nsizes; s++) {
+            item *it = &items[s];
+            aqs_memory_stats e = memory(it), m;
+            const double J = it->joints;
+            if (aqs_linkage_set_tolerance(it->L, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)) != AQS_OK ||
+                aqs_linkage_solve(it->L) != AQS_OK)
+                return fail(it->L, "tolerance");
+            m = memory(it);
+            printf("%10d %10.0f %10.0f %10.0f | %8.0f %8.0f %8.0f %8.0f %8.0f %8.0f\n", (int)it->joints, e.bytes / J,
+                   m.bytes / J, m.peak / J, m.model / J, m.tree / J, m.exact / J, m.dca / J, m.factors / J,
+                   (double)(m.world + m.collision) / J);
         }
     }
     for (s = 0; s < nsizes; s++) {

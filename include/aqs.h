@@ -220,6 +220,35 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *linkage, int32_
                                               int32_t *height, double *mean_handles,
                                               int32_t *max_handles);
 
+/** Memory held by a linkage, counted by the library at every allocation and
+ *  release through the linkage's allocator (docs/api.md, "Memory"): the
+ *  caller sets size = sizeof(aqs_memory_stats); the library fills only the
+ *  fields that size covers (as for aqs_solve_stats). Bytes are those asked
+ *  of the allocator (aqs_linkage_create_with_allocator's alloc sees the same
+ *  sizes), each block's header (16 bytes on common platforms) and the handle included; the
+ *  categories add up to bytes. */
+typedef struct aqs_memory_stats {
+    uint32_t size;      /**< set by the caller: sizeof(aqs_memory_stats) */
+    uint32_t blocks;    /**< blocks held, the handle included */
+    uint64_t bytes;     /**< held now */
+    uint64_t peak;      /**< the largest bytes held at any time since creation */
+    uint64_t model;     /**< what was built: the handle, bodies, joints, loads, names, positions,
+                             results, rigid groups (finalize's scratch while it runs) */
+    uint64_t tree;      /**< the assembly tree: nodes, handle lists, poses, lazy-update sets,
+                             the adaptive solver's lists */
+    uint64_t exact;     /**< the articulated-body solver (exact solves) */
+    uint64_t dca;       /**< the tree's DCA coefficients, inverse inertias, rounding estimate and
+                             the adaptive solver's per-node arrays: allocated by the first
+                             tolerance, cap or AQS_EXACT_DCA (0 before) */
+    uint64_t factors;   /**< the total-acceleration factors (a tolerance or a cap; 0 before) */
+    uint64_t world;     /**< the world measures' per-node data (0 until one is set) */
+    uint64_t collision; /**< shapes, bounding volumes, certificates (0 without shapes) */
+} aqs_memory_stats;
+
+/** Fill stats (stats->size set by the caller, >= 8). Any phase. Returns
+ *  AQS_OK, AQS_EINVAL (NULL linkage or stats, size too small). */
+AQS_API aqs_status aqs_linkage_get_memory(const aqs_linkage *linkage, aqs_memory_stats *stats);
+
 /* ------------------------------------------------------------------------
  * Reading the model back (any phase; what was added, for exporters)
  * ---------------------------------------------------------------------- */

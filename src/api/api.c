@@ -126,6 +126,8 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->alloc = alloc;
     L->free_fn = free_fn;
     L->user = user;
+    L->mem[LK_MEM_MODEL] = L->mem_now = L->mem_peak = sizeof *L; /* aqs_linkage_get_memory */
+    L->mem_blocks = 1;
     L->t.root = -1;
     autopath_init(L);
     *out = L;
@@ -551,6 +553,32 @@ AQS_API aqs_status aqs_linkage_get_tree_stats(const aqs_linkage *cL, int32_t *no
     if (height) *height = L->t.height;
     if (mean_handles) *mean_handles = L->t.mean_handles;
     if (max_handles) *max_handles = L->t.max_handles;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_memory(const aqs_linkage *cL, aqs_memory_stats *stats)
+{
+    static const char fn[] = "aqs_linkage_get_memory";
+    aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
+    aqs_memory_stats full;
+    uint32_t size;
+    if (!L) return AQS_EINVAL;
+    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
+    size = stats->size;
+    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    memset(&full, 0, sizeof full);
+    full.size = size;
+    full.blocks = (uint32_t)L->mem_blocks;
+    full.bytes = L->mem_now;
+    full.peak = L->mem_peak;
+    full.model = L->mem[LK_MEM_MODEL];
+    full.tree = L->mem[LK_MEM_TREE];
+    full.exact = L->mem[LK_MEM_EXACT];
+    full.dca = L->mem[LK_MEM_DCA];
+    full.factors = L->mem[LK_MEM_FACTORS];
+    full.world = L->mem[LK_MEM_WORLD];
+    full.collision = L->mem[LK_MEM_COLLISION];
+    memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }
 

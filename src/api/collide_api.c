@@ -15,7 +15,7 @@
 static collision *collide_state(aqs_linkage *L)
 {
     if (!L->col) {
-        L->col = lk_calloc(L, 1, sizeof(collision));
+        L->col = lk_calloc_in(L, LK_MEM_COLLISION, 1, sizeof(collision));
         if (!L->col) return NULL;
         L->col->world_group = 1u;
         L->col->world_mask = 0xFFFFFFFFu;
@@ -84,7 +84,7 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
     if (!c) return oom(L, fn);
     if (c->nshapes == c->shape_cap) {
         int32_t cap = c->shape_cap ? 2 * c->shape_cap : 8;
-        shape_def *grown = lk_alloc(L, (size_t)cap * sizeof(shape_def));
+        shape_def *grown = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)cap * sizeof(shape_def));
         if (!grown) return oom(L, fn);
         if (c->nshapes) memcpy(grown, c->shapes, (size_t)c->nshapes * sizeof(shape_def));
         lk_free(L, c->shapes);
@@ -159,7 +159,7 @@ AQS_API aqs_status aqs_shape_add_hull(aqs_linkage *L, int32_t body, const double
     s.type = AQS_SHAPE_HULL;
     s.body = body;
     s.npts = npoints;
-    s.pts = lk_alloc(L, (size_t)npoints * 3 * sizeof(double));
+    s.pts = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)npoints * 3 * sizeof(double));
     if (!s.pts) return oom(L, fn);
     memcpy(s.pts, points, (size_t)npoints * 3 * sizeof(double));
     if ((st = push_shape(L, fn, &s, out_shape)) != AQS_OK) lk_free(L, s.pts);
@@ -189,8 +189,8 @@ AQS_API aqs_status aqs_body_set_collision_filter(aqs_linkage *L, int32_t body, u
     } else {
         if (body >= c->nfilter) {
             int32_t n = L->nbodies, i;
-            uint32_t *g = lk_alloc(L, (size_t)n * sizeof(uint32_t));
-            uint32_t *m = lk_alloc(L, (size_t)n * sizeof(uint32_t));
+            uint32_t *g = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)n * sizeof(uint32_t));
+            uint32_t *m = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)n * sizeof(uint32_t));
             if (!g || !m) {
                 lk_free(L, g);
                 lk_free(L, m);
@@ -232,7 +232,7 @@ AQS_API aqs_status aqs_collision_exclude_pair(aqs_linkage *L, int32_t a, int32_t
     if (pos < c->nexcl && c->excl[pos] == key) return AQS_OK;
     if (c->nexcl == c->excl_cap) {
         int32_t cap = c->excl_cap ? 2 * c->excl_cap : 8;
-        uint64_t *grown = lk_alloc(L, (size_t)cap * sizeof(uint64_t));
+        uint64_t *grown = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)cap * sizeof(uint64_t));
         if (!grown) return oom(L, fn);
         if (c->nexcl) memcpy(grown, c->excl, (size_t)c->nexcl * sizeof(uint64_t));
         lk_free(L, c->excl);

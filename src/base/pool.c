@@ -6,24 +6,75 @@
 #include <stdlib.h>
 #include <string.h>
 
-void *lk_alloc(aqs_linkage *L, size_t bytes)
+/* The header in front of every block: its size as requested from the
+ * allocator and its category. The union keeps what follows aligned as the
+ * allocator's blocks are (any C type: its size is a multiple of the
+ * strictest alignment among its members, which are there for that); 16 bytes
+ * where no type needs more (aqs.h, aqs_memory_stats). */
+typedef union {
+    struct {
+        size_t bytes;
+        int category;
+    } h;
+    long double ld;
+    double d;
+    void *p;
+    int64_t i;
+    unsigned char size16[16];
+} block_header;
+
+size_t lk_block_bytes(size_t bytes)
 {
-    if (bytes == 0) bytes = 1;
-    return L->alloc(L->user, bytes);
+    return (bytes == 0 ? 1 : bytes) + sizeof(block_header);
 }
 
-void *lk_calloc(aqs_linkage *L, size_t count, size_t size)
+void *lk_alloc_in(aqs_linkage *L, int category, size_t bytes)
+{
+    block_header *b;
+    AQS_ASSERT(category >= 0 && category < LK_MEM_COUNT);
+    if (bytes == 0) bytes = 1;
+    if (bytes > (size_t)-1 - sizeof(block_header)) return NULL;
+    bytes += sizeof(block_header);
+    b = (block_header *)L->alloc(L->user, bytes);
+    if (!b) return NULL;
+    b->h.bytes = bytes;
+    b->h.category = category;
+    L->mem[category] += bytes;
+    L->mem_now += bytes;
+    L->mem_blocks++;
+    if (L->mem_now > L->mem_peak) L->mem_peak = L->mem_now;
+    return b + 1;
+}
+
+void *lk_alloc(aqs_linkage *L, size_t bytes)
+{
+    return lk_alloc_in(L, LK_MEM_MODEL, bytes);
+}
+
+void *lk_calloc_in(aqs_linkage *L, int category, size_t count, size_t size)
 {
     void *p;
     if (size != 0 && count > (size_t)-1 / size) return NULL;
-    p = lk_alloc(L, count * size);
+    p = lk_alloc_in(L, category, count * size);
     if (p) memset(p, 0, count * size);
     return p;
 }
 
+void *lk_calloc(aqs_linkage *L, size_t count, size_t size)
+{
+    return lk_calloc_in(L, LK_MEM_MODEL, count, size);
+}
+
 void lk_free(aqs_linkage *L, void *p)
 {
-    if (p) L->free_fn(L->user, p);
+    block_header *b;
+    if (!p) return;
+    b = (block_header *)p - 1;
+    AQS_ASSERT(b->h.category >= 0 && b->h.category < LK_MEM_COUNT && L->mem[b->h.category] >= b->h.bytes);
+    L->mem[b->h.category] -= b->h.bytes;
+    L->mem_now -= b->h.bytes;
+    L->mem_blocks--;
+    L->free_fn(L->user, b);
 }
 
 int64_t pool_take(int64_t *size, int64_t n)

@@ -41,7 +41,7 @@ static int reserve_handles(builder *B, int64_t extra)
     int64_t cap = B->cap;
     if (B->nhv + extra <= B->cap) return 0;
     while (cap < B->nhv + extra) cap = cap * 2 + 16;
-    nh = lk_alloc(B->L, (size_t)cap * sizeof(int32_t));
+    nh = lk_alloc_in(B->L, LK_MEM_TREE, (size_t)cap * sizeof(int32_t));
     if (!nh) return -1;
     if (B->nhv) memcpy(nh, B->hv, (size_t)B->nhv * sizeof(int32_t));
     lk_free(B->L, B->hv);
@@ -106,9 +106,9 @@ static aqs_status contract(builder *B, int32_t nvert)
     int32_t *live = NULL, *next = NULL, *stamp = NULL;
     int32_t nlive = nvert, round = 0, i, k;
     aqs_status st = AQS_OK;
-    live = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
-    next = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
-    stamp = lk_calloc(L, (size_t)B->L->t.nnodes, sizeof(int32_t));
+    live = lk_alloc_in(L, LK_MEM_TREE, (size_t)nvert * sizeof(int32_t));
+    next = lk_alloc_in(L, LK_MEM_TREE, (size_t)nvert * sizeof(int32_t));
+    stamp = lk_calloc_in(L, LK_MEM_TREE, (size_t)B->L->t.nnodes, sizeof(int32_t));
     if (!live || !next || !stamp) {
         st = AQS_ENOMEM;
         goto done;
@@ -177,14 +177,14 @@ static aqs_status bisect(builder *B, int32_t nvert)
     aqs_linkage *L = B->L;
     const model *m = &L->m;
     const node *nodes = L->t.nodes;
-    int32_t *verts = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
-    int32_t *tag = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
-    int32_t *par = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
-    int32_t *pedge = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
-    int32_t *size = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
-    int32_t *order = lk_alloc(L, sizeof(int32_t) * (size_t)nvert);
-    int32_t *stamp = lk_calloc(L, (size_t)L->t.nnodes, sizeof(int32_t));
-    bisect_frame *stack = lk_alloc(L, sizeof(bisect_frame) * (size_t)(nvert + 1));
+    int32_t *verts = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)nvert);
+    int32_t *tag = lk_calloc_in(L, LK_MEM_TREE, (size_t)nvert, sizeof(int32_t));
+    int32_t *par = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)nvert);
+    int32_t *pedge = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)nvert);
+    int32_t *size = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)nvert);
+    int32_t *order = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)nvert);
+    int32_t *stamp = lk_calloc_in(L, LK_MEM_TREE, (size_t)L->t.nnodes, sizeof(int32_t));
+    bisect_frame *stack = lk_alloc_in(L, LK_MEM_TREE, sizeof(bisect_frame) * (size_t)(nvert + 1));
     int32_t top = 0, ntag = 0, i, result = -1;
     aqs_status st = AQS_OK;
     if (!verts || !tag || !par || !pedge || !size || !order || !stamp || !stack) {
@@ -316,10 +316,10 @@ static int renumber_postorder(aqs_linkage *L)
 {
     tree *t = &L->t;
     int32_t n = t->nnodes, top = 0, next = 0, i;
-    int32_t *stack = lk_alloc(L, sizeof(int32_t) * (size_t)(n + 1));
-    int32_t *newid = lk_alloc(L, sizeof(int32_t) * (size_t)(n + 1));
-    unsigned char *expanded = lk_calloc(L, (size_t)n + 1, 1);
-    node *copy = lk_alloc(L, sizeof(node) * (size_t)(n + 1));
+    int32_t *stack = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)(n + 1));
+    int32_t *newid = lk_alloc_in(L, LK_MEM_TREE, sizeof(int32_t) * (size_t)(n + 1));
+    unsigned char *expanded = lk_calloc_in(L, LK_MEM_TREE, (size_t)n + 1, 1);
+    node *copy = lk_alloc_in(L, LK_MEM_TREE, sizeof(node) * (size_t)(n + 1));
     if (!stack || !newid || !expanded || !copy) {
         lk_free(L, stack);
         lk_free(L, newid);
@@ -356,8 +356,11 @@ static int renumber_postorder(aqs_linkage *L)
     return 0;
 }
 
-/* Offsets of every node's pooled arrays. */
-static void layout(tree *t)
+/* Offsets of every node's pooled arrays. Lambda's columns (lld): the
+ * square-root form's node update gives C the rank d + rank_A + rank_B, at
+ * most 6nh (src/solve/dca.c), leaves 0: known here, children first; the
+ * inverse-inertia form keeps Phi (6nh x 6nh) in its place. */
+static void layout(tree *t, int32_t form)
 {
     int32_t i;
     t->ndata = 0;
@@ -365,9 +368,15 @@ static void layout(tree *t)
     for (i = 0; i < t->nnodes; i++) {
         node *n = &t->nodes[i];
         int64_t h = n->nh;
+        if (form == AQS_DCA_FORM_PHI) n->lld = 6 * n->nh;
+        else if (n->joint < 0) n->lld = 0;
+        else {
+            int32_t r = n->d + t->nodes[n->a].lld + t->nodes[n->b].lld;
+            n->lld = r < 6 * n->nh ? r : 6 * n->nh;
+        }
         n->poses = pool_take(&t->nposes, h + (n->joint >= 0 ? 1 : 0)); /* and nd_J */
         /* b, then nd_xf, nd_ic, nd_lam and (internal) nd_W, nd_U, nd_rho, nd_gamma, nd_S */
-        n->bv = pool_take(&t->ndata, 12 * h + 13 + 36 * h * h +
+        n->bv = pool_take(&t->ndata, 12 * h + 13 + 6 * h * n->lld +
                                          (n->joint >= 0 ? 36 * h + 6 * n->d * h + n->d + 6 + 6 * n->d : 0));
     }
 }
@@ -386,12 +395,12 @@ aqs_status assembly_build(aqs_linkage *L)
     B.L = L;
     t->root = -1;
     t->nnodes = nvert + m->ne;
-    t->nodes = lk_calloc(L, (size_t)t->nnodes, sizeof(node));
-    t->node_of_eff = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    t->leaf_of_comp = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
-    B.uf = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
-    B.uf_node = lk_alloc(L, (size_t)nvert * sizeof(int32_t));
-    cursor = lk_calloc(L, (size_t)nvert, sizeof(int32_t));
+    t->nodes = lk_calloc_in(L, LK_MEM_TREE, (size_t)t->nnodes, sizeof(node));
+    t->node_of_eff = lk_calloc_in(L, LK_MEM_TREE, (size_t)m->ne + 1, sizeof(int32_t));
+    t->leaf_of_comp = lk_calloc_in(L, LK_MEM_TREE, (size_t)nvert, sizeof(int32_t));
+    B.uf = lk_alloc_in(L, LK_MEM_TREE, (size_t)nvert * sizeof(int32_t));
+    B.uf_node = lk_alloc_in(L, LK_MEM_TREE, (size_t)nvert * sizeof(int32_t));
+    cursor = lk_calloc_in(L, LK_MEM_TREE, (size_t)nvert, sizeof(int32_t));
     if (!t->nodes || !t->node_of_eff || !t->leaf_of_comp || !B.uf || !B.uf_node || !cursor ||
         reserve_handles(&B, 2 * (int64_t)m->ne) != 0)
         goto fail;
@@ -442,19 +451,19 @@ aqs_status assembly_build(aqs_linkage *L)
     }
     if (t->nnodes > 0) t->height = t->nodes[t->root].height;
     t->mean_handles = t->nnodes > 0 ? (double)total_h / t->nnodes : 0.0;
-    layout(t);
+    layout(t, L->dca_form);
     t->poses = NULL; /* update_poses_alloc, when the DCA, collision or a pose query first needs them */
     t->poses_stale = 1;
     t->data = NULL; /* the DCA coefficients: dca_enable, when a DCA solve first needs them */
     /* dca_node_update: Y (6nh x 6) + Z and Z D^-1 (6nh x d, d <= 6 each) = 108 nh doubles */
-    t->scratch = lk_calloc(L, 108 * (size_t)(t->max_handles + 2), sizeof(double));
-    t->mscratch = lk_calloc(L, 36 * (size_t)(t->max_handles + 1), sizeof(double));
-    t->hscratch = lk_calloc(L, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6) +
+    t->scratch = lk_calloc_in(L, LK_MEM_TREE, 108 * (size_t)(t->max_handles + 2), sizeof(double));
+    t->mscratch = lk_calloc_in(L, LK_MEM_TREE, 36 * (size_t)(t->max_handles + 1), sizeof(double));
+    t->hscratch = lk_calloc_in(L, LK_MEM_TREE, (6 * (size_t)t->max_handles + 14) * (12 * (size_t)t->max_handles + 6) +
                                 (size_t)t->max_handles * (sizeof(pose) / sizeof(double) + 1),
                             sizeof(double));
-    t->stamp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(uint32_t));
-    t->dirty = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
-    t->dirty_tmp = lk_calloc(L, (size_t)t->nnodes + 1, sizeof(int32_t));
+    t->stamp = lk_calloc_in(L, LK_MEM_TREE, (size_t)t->nnodes + 1, sizeof(uint32_t));
+    t->dirty = lk_calloc_in(L, LK_MEM_TREE, (size_t)t->nnodes + 1, sizeof(int32_t));
+    t->dirty_tmp = lk_calloc_in(L, LK_MEM_TREE, (size_t)t->nnodes + 1, sizeof(int32_t));
     t->epoch = 1;
     if (!t->scratch || !t->mscratch || !t->hscratch || !t->stamp || !t->dirty ||
         !t->dirty_tmp) goto fail;

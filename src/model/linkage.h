@@ -39,6 +39,10 @@ typedef struct {
     int32_t jw;           /* the 6 rows of Lambda of the handle the parent joins use only its
                              first jw columns (<= rank; 6 when compressed and that handle is
                              the first) */
+    int32_t lld;          /* Lambda's row stride and column capacity (src/model/assembly.c's
+                             layout): the structural rank min(6nh, d + lld_A + lld_B) in the
+                             square-root form (0 for leaves; rank never exceeds it), 6nh in
+                             the inverse-inertia form (Phi, 6nh x 6nh) */
     unsigned char d;      /* dofs of the principal joint (<= 6) */
     unsigned char grounded; /* holds the world leaf: I^-1 = 0 */
     unsigned char forced; /* the node or a descendant holds a free joint: always computed */
@@ -52,8 +56,9 @@ typedef struct {
  *   xf     handle forces x (6nh)
  *   ic     mass properties of the subassembly: mass, centre of mass, inertia about it
  *          (13 doubles, node frame; zero when grounded)
- *   lam    Lambda (6nh x rank, row-major, capacity 6nh x 6nh): Phi = G I^-1 G^T
- *          + Lambda Lambda^T (src/solve/dca.c, docs/math.md "Accurate Phi")
+ *   lam    Lambda (6nh x rank, row-major with row stride lld, capacity 6nh x lld):
+ *          Phi = G I^-1 G^T + Lambda Lambda^T (src/solve/dca.c, docs/math.md
+ *          "Accurate Phi"); in the inverse-inertia form Phi itself (lld = 6nh)
  *   W      FX = W M^T (6 x 6nh): the joint force is f = FX x + gamma
  *   U, rho, gamma, S: QX = U M^T (d x 6nh): qdd = rho - QX x; rho (d), gamma (6),
  *          S (6 x d); x: the node's handle forces
@@ -62,7 +67,7 @@ typedef struct {
 static inline int64_t nd_xf(const node *n) { return n->bv + 6 * (int64_t)n->nh; }
 static inline int64_t nd_ic(const node *n) { return n->bv + 12 * (int64_t)n->nh; }
 static inline int64_t nd_lam(const node *n) { return nd_ic(n) + 13; }
-static inline int64_t nd_W(const node *n) { return nd_lam(n) + 36 * (int64_t)n->nh * n->nh; }
+static inline int64_t nd_W(const node *n) { return nd_lam(n) + 6 * (int64_t)n->nh * n->lld; }
 static inline int64_t nd_U(const node *n) { return nd_W(n) + 36 * (int64_t)n->nh; }
 static inline int64_t nd_rho(const node *n) { return nd_U(n) + 6 * (int64_t)n->d * n->nh; }
 static inline int64_t nd_gamma(const node *n) { return nd_rho(n) + n->d; }
@@ -72,8 +77,10 @@ static inline int64_t nd_J(const node *n) { return n->poses + n->nh; }
 /* A node's square-root total-acceleration factor (§5, src/solve/totalacc.c). */
 typedef struct {
     int64_t T;            /* the factor, in tree.tdata */
-    int64_t tpos;         /* the first column of each row of T, in tree.trowpos */
-    int32_t trows;        /* rows of T (<= 6nh + 1); 0 for leaves */
+    int64_t tpos;         /* the first column of each row of T, in tree.trowpos (tcap entries) */
+    int32_t trows;        /* rows of T (<= tcap); 0 for leaves */
+    int32_t tcap;         /* rows T has room for: min(6nh + 1, the counted dofs of the
+                             subassembly), which bounds them (src/solve/totalacc.c) */
 } tfactor;
 
 typedef struct {
@@ -135,7 +142,8 @@ typedef struct {
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
     double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
                                finalize (kin_comp_inertia has it, packed) */
-    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc */
+    double *comp_inverse;   /* ncomp x 36; NULL until model_inverse_alloc (read through
+                               model_inverse_apply, which computes it when not held) */
     double *comp_force;     /* (ncomp + 1) x 6: external load, composite frame */
     unsigned char *comp_loaded; /* ncomp + 1 */
     int32_t *loaded_comps;  /* comps whose comp_force is non-zero */
@@ -276,10 +284,29 @@ typedef struct {
     double cost_adaptive, cost_exact; /* the model's costs for the last solve (0: not asked) */
 } autopath_state;
 
+/* Memory through the linkage's allocator (src/base/pool.c). Every block
+ * carries a header with its size and what it is for, so that the linkage
+ * counts what it holds by category (aqs_linkage_get_memory). lk_alloc and
+ * lk_calloc count as LK_MEM_MODEL; the _in forms name the category
+ * (functions below, after the struct). */
+enum {
+    LK_MEM_MODEL,     /* what was built: bodies, joints, loads, names, results, rigid groups */
+    LK_MEM_TREE,      /* the assembly tree: nodes, handle lists, poses, lazy-update sets */
+    LK_MEM_EXACT,     /* the articulated-body solver */
+    LK_MEM_DCA,       /* DCA coefficients, inverse inertias, rounding estimate, adaptive arrays */
+    LK_MEM_FACTORS,   /* total-acceleration factors */
+    LK_MEM_WORLD,     /* the world measures' per-node data */
+    LK_MEM_COLLISION, /* shapes, bounding volumes, certificates */
+    LK_MEM_COUNT
+};
+
 struct aqs_linkage {
     aqs_alloc_fn alloc;
     aqs_free_fn free_fn;
     void *user;
+    size_t mem[LK_MEM_COUNT]; /* bytes held by category, headers included (the handle in MODEL) */
+    size_t mem_now, mem_peak; /* their sum, and its largest value so far */
+    size_t mem_blocks;        /* blocks held, the handle included */
     char error[640];
     int finalized;
     int solved;
@@ -340,10 +367,14 @@ static inline const char *lk_joint_name(const aqs_linkage *L, int32_t joint)
 /* Release the names and the load warnings (aqs_linkage_destroy; src/api/names.c). */
 void lk_names_free(aqs_linkage *L);
 
-/* Memory through the linkage's allocator. */
 void *lk_alloc(aqs_linkage *L, size_t bytes);
 void *lk_calloc(aqs_linkage *L, size_t count, size_t size);
+void *lk_alloc_in(aqs_linkage *L, int category, size_t bytes);
+void *lk_calloc_in(aqs_linkage *L, int category, size_t count, size_t size);
 void lk_free(aqs_linkage *L, void *p);
+/* Bytes (headers included) requested from the allocator for one block of
+ * `bytes` (the handle is counted as allocated, without a header). */
+size_t lk_block_bytes(size_t bytes);
 /* Record an error message (printf-style) and return status. */
 aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
 #ifdef __GNUC__

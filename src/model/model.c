@@ -177,20 +177,35 @@ void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
     spatial_inertia(b->mass, b->com, b->inertia, I);
 }
 
+static void comp_inverse(const aqs_linkage *L, int32_t c, double out[36])
+{
+    const model *m = &L->m;
+    double I[36];
+    if (m->comp_inertia) memcpy(I, m->comp_inertia + 36 * (size_t)c, sizeof I);
+    else kin_comp_inertia(L, c, I);
+    (void)dense_spd_inverse(I, out, 6); /* checked at finalize */
+}
+
 aqs_status model_inverse_alloc(aqs_linkage *L)
 {
     model *m = &L->m;
     int32_t c;
     if (m->comp_inverse) return AQS_OK;
-    m->comp_inverse = lk_calloc(L, (size_t)m->ncomp + 1, 36 * sizeof(double));
+    m->comp_inverse = lk_calloc_in(L, LK_MEM_DCA, (size_t)m->ncomp + 1, 36 * sizeof(double));
     if (!m->comp_inverse) return AQS_ENOMEM;
-    for (c = 0; c < m->ncomp; c++) {
-        double I[36];
-        if (m->comp_inertia) memcpy(I, m->comp_inertia + 36 * (size_t)c, sizeof I);
-        else kin_comp_inertia(L, c, I);
-        (void)dense_spd_inverse(I, m->comp_inverse + 36 * (size_t)c, 6); /* checked at finalize */
-    }
+    for (c = 0; c < m->ncomp; c++) comp_inverse(L, c, m->comp_inverse + 36 * (size_t)c);
     return AQS_OK;
+}
+
+void model_inverse_apply(const aqs_linkage *L, int32_t c, const double f[6], double a[6])
+{
+    double Ii[36];
+    if (L->m.comp_inverse) {
+        dense_matvec(L->m.comp_inverse + 36 * (size_t)c, f, a, 6, 6);
+        return;
+    }
+    comp_inverse(L, c, Ii);
+    dense_matvec(Ii, f, a, 6, 6);
 }
 
 void model_drop_inertia(aqs_linkage *L)

@@ -13,9 +13,15 @@ aqs_status model_check_body(aqs_linkage *L, const char *fn, double mass, const d
 aqs_status model_build(aqs_linkage *L);
 void model_free(aqs_linkage *L);
 /* The composites' inverse inertias (comp_inverse), allocated and computed
- * when first needed: the DCA (dca_enable) and welded bodies (finalize).
+ * when first needed: the inverse-inertia form (dca_enable), welded bodies
+ * (finalize) and the world measures (worldbound_enable).
  * AQS_OK or AQS_ENOMEM (nothing changed). */
 aqs_status model_inverse_alloc(aqs_linkage *L);
+/* a = I_c^-1 f for composite c: from comp_inverse when it is held (welded
+ * bodies, the inverse-inertia form, a world measure), else computed as
+ * model_inverse_alloc would compute it (the same bits; the square-root form
+ * needs it only when a leaf's centre-of-mass factor fails). */
+void model_inverse_apply(const aqs_linkage *L, int32_t c, const double f[6], double a[6]);
 /* Release comp_inertia and eff_place after finalize: the articulated-body
  * solver keeps both in its own order (kin_comp_inertia, kin_eff_place). */
 void model_drop_inertia(aqs_linkage *L);

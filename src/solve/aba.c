@@ -63,15 +63,15 @@ aqs_status aba_alloc(aqs_linkage *L)
     aba_state *a = &L->aba;
     int32_t *head, *next, *stack, e, n = 0, top = 0, i;
     int multi = 0;
-    a->joint = lk_calloc(L, (size_t)m->ne + 1, sizeof(aba_joint));
-    a->node = lk_calloc(L, (size_t)m->ne + 1, sizeof(aba_node));
-    a->pos_of_comp = lk_calloc(L, (size_t)m->ncomp + 1, sizeof(int32_t));
-    a->x = lk_calloc(L, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
-    a->need = lk_calloc(L, (size_t)m->ne + 1, 1);
-    a->path = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    head = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));
-    next = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
-    stack = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+    a->joint = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(aba_joint));
+    a->node = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(aba_node));
+    a->pos_of_comp = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ncomp + 1, sizeof(int32_t));
+    a->x = lk_calloc_in(L, LK_MEM_EXACT, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
+    a->need = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, 1);
+    a->path = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
+    head = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ncomp + 2, sizeof(int32_t));
+    next = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
+    stack = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
     if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !a->path || !head || !next || !stack) {
         lk_free(L, head);
         lk_free(L, next);
@@ -116,7 +116,7 @@ aqs_status aba_alloc(aqs_linkage *L)
                                    (int)n, (int)m->ne);
     if (multi) { /* U and u of the multi-dof joints only, at moff of their position */
         size_t nm = 0;
-        a->moff = lk_calloc(L, (size_t)m->ne + 1, sizeof(int32_t));
+        a->moff = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
         if (!a->moff) return AQS_ENOMEM;
         for (i = 0; i < m->ne; i++) {
             int d = joint_nv(a->joint[i].type);
@@ -125,8 +125,8 @@ aqs_status aba_alloc(aqs_linkage *L)
                 nm += (size_t)d;
             }
         }
-        a->Um = lk_calloc(L, 6 * nm + 1, sizeof(double));
-        a->um = lk_calloc(L, nm + 1, sizeof(double));
+        a->Um = lk_calloc_in(L, LK_MEM_EXACT, 6 * nm + 1, sizeof(double));
+        a->um = lk_calloc_in(L, LK_MEM_EXACT, nm + 1, sizeof(double));
         if (!a->Um || !a->um) return AQS_ENOMEM;
     }
     a->dirty = 1; /* IA and pA set by the first solve */

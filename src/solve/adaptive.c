@@ -24,8 +24,8 @@ aqs_status adaptive_alloc(aqs_linkage *L)
     int32_t i;
     /* The heap, the prediction and the A values: dca_enable, with the DCA
      * coefficients (an adaptive solve needs those first). */
-    s->processed = lk_calloc(L, n, sizeof(int32_t));
-    s->reached = lk_calloc(L, (size_t)L->m.ncomp + 2, sizeof(int32_t));
+    s->processed = lk_calloc_in(L, LK_MEM_TREE, n, sizeof(int32_t));
+    s->reached = lk_calloc_in(L, LK_MEM_TREE, (size_t)L->m.ncomp + 2, sizeof(int32_t));
     if (!s->processed || !s->reached) return AQS_ENOMEM;
     s->npred = 0;
     s->margin = AQS_PREDICTION_MARGIN;

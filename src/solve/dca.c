@@ -23,26 +23,27 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     tree *t = &L->t;
     int32_t n;
     if (t->data) return AQS_OK;
-    if (!t->rnd_x && !(t->rnd_x = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
+    if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
-    if (!t->rnd_node && !(t->rnd_node = lk_calloc(L, 5 * (size_t)t->nnodes + 1, sizeof(double))))
+    if (!t->rnd_node && !(t->rnd_node = lk_calloc_in(L, LK_MEM_DCA, 5 * (size_t)t->nnodes + 1, sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     { /* the adaptive solver's per-node arrays (src/solve/adaptive.c), not held by a
          linkage solved only by the articulated-body algorithm */
         solve_state *s = &L->s;
         size_t nn = (size_t)t->nnodes + 1;
-        if (!s->heap_key) s->heap_key = lk_calloc(L, nn, sizeof(double));
-        if (!s->heap_item) s->heap_item = lk_calloc(L, nn, sizeof(int32_t));
-        if (!s->pred) s->pred = lk_calloc(L, nn, 1);
-        if (!s->tstale) s->tstale = lk_calloc(L, nn, 1);
-        if (!s->aval) s->aval = lk_calloc(L, nn, sizeof(double));
-        if (!s->plist) s->plist = lk_calloc(L, nn, sizeof(int32_t));
+        if (!s->heap_key) s->heap_key = lk_calloc_in(L, LK_MEM_DCA, nn, sizeof(double));
+        if (!s->heap_item) s->heap_item = lk_calloc_in(L, LK_MEM_DCA, nn, sizeof(int32_t));
+        if (!s->pred) s->pred = lk_calloc_in(L, LK_MEM_DCA, nn, 1);
+        if (!s->tstale) s->tstale = lk_calloc_in(L, LK_MEM_DCA, nn, 1);
+        if (!s->aval) s->aval = lk_calloc_in(L, LK_MEM_DCA, nn, sizeof(double));
+        if (!s->plist) s->plist = lk_calloc_in(L, LK_MEM_DCA, nn, sizeof(int32_t));
         if (!s->heap_key || !s->heap_item || !s->pred || !s->tstale || !s->aval || !s->plist)
             return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the adaptive solver", fn);
     }
-    if (frames_poses_alloc(L) != AQS_OK || model_inverse_alloc(L) != AQS_OK) /* read below */
+    if (frames_poses_alloc(L) != AQS_OK ||
+        (L->dca_form == AQS_DCA_FORM_PHI && model_inverse_alloc(L) != AQS_OK)) /* dca_phi_leaf's Phi */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
-    t->data = lk_calloc(L, (size_t)t->ndata + 1, sizeof(double));
+    t->data = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
                        (long long)t->ndata);
@@ -89,7 +90,7 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
         /* acc = I^-1 f = Y (Y^T f), through the centre of mass (the square-root
          * form's mass properties); the inverse-inertia form keeps finalize's */
         if (L->dca_form == AQS_DCA_FORM_PHI || mp_inverse_factor(t->data + nd_ic(nd), Y) != 0) {
-            dense_matvec(L->m.comp_inverse + 36 * nd->comp, f, acc, 6, 6);
+            model_inverse_apply(L, nd->comp, f, acc);
         } else {
             dense_tmatvec6(Y, f, w);
             dense_matvec6(Y, w, acc);
@@ -759,7 +760,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
-    const int32_t ldA = 6 * nA, ldB = 6 * nB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
+    /* Lambda's row stride (node.lld) is its rank: the structural rank layout() gave it */
+    const int32_t ldA = rA, ldB = rB, c = 6 - d, ncol = 6 + rA + rB, orows = 6 * nh;
     /* Columns: [relative rigid mode (6) | A's first jw | B's first jw | A's rest | B's rest]:
      * the children's join blocks (A's handle ka, B's kb) use only their first
      * jw columns, so the constraint and relative rows span the first w columns
@@ -992,8 +994,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
-    for (r = 0; r < orows; r++) /* columns rank .. 6nh-1 are never read */
-        memcpy(LC + (int64_t)r * orows, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
+    for (r = 0; r < orows; r++)
+        memcpy(LC + (int64_t)r * rank, X + (int64_t)r * ncol + c, sizeof(double) * (size_t)rank);
     C->rank = rank;
     return 0;
 }
@@ -1106,7 +1108,7 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, const double *x, 
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
     }
-    dense_matvec(L->m.comp_inverse + 36 * c, f, a, 6, 6);
+    model_inverse_apply(L, c, f, a);
 }
 
 /* Newton's law on each welded subtree S hanging from fixed joint j:

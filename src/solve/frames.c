@@ -78,7 +78,7 @@ aqs_status frames_poses_alloc(aqs_linkage *L)
     tree *t = &L->t;
     int32_t n;
     if (t->poses) return AQS_OK;
-    t->poses = lk_calloc(L, (size_t)t->nposes + 1, sizeof(pose));
+    t->poses = lk_calloc_in(L, LK_MEM_TREE, (size_t)t->nposes + 1, sizeof(pose));
     if (!t->poses)
         return lk_fail(L, AQS_ENOMEM, "out of memory for the assembly tree's %lld poses", (long long)t->nposes);
     for (n = 0; n < t->nnodes; n++)

@@ -52,6 +52,33 @@ static void order_handles(tree *t, int32_t n)
     }
 }
 
+/* Room for T's rows: T_C's rows come from the children's (each child row
+ * placed or reflected, no more rows out of the reflections than into them)
+ * and K's kd, so they are at most the counted dofs of the subassembly, and
+ * at most its columns (upper triangular). Row r starts at column r or later,
+ * so R rows take at most R cols - R (R - 1) / 2 doubles packed. The counts go
+ * through tf[].tcap, children first. */
+static void factor_room(const aqs_linkage *L, tfactor *tf, int64_t *size, int64_t *npos)
+{
+    const tree *t = &L->t;
+    int32_t n;
+    *size = *npos = 0;
+    for (n = 0; n < t->nnodes; n++) {
+        const node *nd = &t->nodes[n];
+        int64_t cols = 6 * (int64_t)nd->nh + 1, dofs, R;
+        tf[n].tcap = 0;
+        if (nd->joint < 0) continue;
+        dofs = (int64_t)tf[nd->a].tcap + tf[nd->b].tcap +
+               (L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE ? nd->d : 0);
+        R = dofs < cols ? dofs : cols;
+        tf[n].tcap = (int32_t)R;
+        tf[n].T = *size;
+        tf[n].tpos = *npos;
+        *size += R * cols - R * (R - 1) / 2;
+        *npos += R;
+    }
+}
+
 aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
 {
     tree *t = &L->t;
@@ -62,23 +89,16 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
     tfactor *tf;
     aqs_status st;
     if ((st = dca_enable(L, fn)) != AQS_OK) return st;
-    for (n = 0; n < t->nnodes; n++) {
-        const node *nd = &t->nodes[n];
-        int64_t cols = 6 * (int64_t)nd->nh + 1;
-        if (nd->joint >= 0) {
-            size += cols * (cols + 1) / 2;
-            npos += cols;
-        }
-    }
-    tf = lk_calloc(L, (size_t)t->nnodes + 1, sizeof *tf);
-    tdata = lk_calloc(L, (size_t)size + 1, sizeof(double));
+    tf = lk_calloc_in(L, LK_MEM_FACTORS, (size_t)t->nnodes + 1, sizeof *tf);
+    if (tf) factor_room(L, tf, &size, &npos);
+    tdata = lk_calloc_in(L, LK_MEM_FACTORS, (size_t)size + 1, sizeof(double));
     /* the reflected rows (column-major, at most 6 + 6 + 6), the node's
      * factor unpacked (cmax x cmax) and one row of M W (cmax) */
-    scratch = lk_calloc(L, (size_t)(cmax + 19) * (size_t)cmax, sizeof(double));
-    perm = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(int32_t));
+    scratch = lk_calloc_in(L, LK_MEM_FACTORS, (size_t)(cmax + 19) * (size_t)cmax, sizeof(double));
+    perm = lk_calloc_in(L, LK_MEM_FACTORS, (size_t)t->nhandles + 1, sizeof(int32_t));
     /* posC, mapA, mapB (nh each) and the present rows (cols) */
-    iscratch = lk_calloc(L, 3 * (size_t)t->max_handles + (size_t)cmax + 3, sizeof(int32_t));
-    rowpos = lk_calloc(L, (size_t)npos + 1, sizeof(int32_t));
+    iscratch = lk_calloc_in(L, LK_MEM_FACTORS, 3 * (size_t)t->max_handles + (size_t)cmax + 3, sizeof(int32_t));
+    rowpos = lk_calloc_in(L, LK_MEM_FACTORS, (size_t)npos + 1, sizeof(int32_t));
     if (!tf || !tdata || !scratch || !perm || !iscratch || !rowpos) {
         lk_free(L, tf);
         lk_free(L, tdata);
@@ -91,16 +111,6 @@ aqs_status totalacc_enable(aqs_linkage *L, const char *fn)
     }
     t->tdata = tdata;
     t->tf = tf;
-    for (n = 0, size = npos = 0; n < t->nnodes; n++) {
-        const node *nd = &t->nodes[n];
-        int64_t cols = 6 * (int64_t)nd->nh + 1;
-        tf[n].T = size;
-        tf[n].tpos = npos;
-        if (nd->joint >= 0) {
-            size += cols * (cols + 1) / 2;
-            npos += cols;
-        }
-    }
     t->tscratch = scratch;
     t->tperm = perm;
     t->tiscratch = iscratch;
@@ -294,7 +304,8 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
         off += cols - j;
         rowpos[r++] = j;
     }
-    AQS_ASSERT(r <= cols && off <= (int64_t)cols * (cols + 1) / 2); /* packed triangle */
+    /* packed triangle, within the room factor_room gave it */
+    AQS_ASSERT(r <= t->tf[n].tcap && off <= (int64_t)r * cols - (int64_t)r * (r - 1) / 2);
     t->tf[C - t->nodes].trows = r;
 }
 

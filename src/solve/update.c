@@ -118,14 +118,17 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     AQS_ASSERT(nd->a < n && nd->b < n && (nd->parent < 0 || nd->parent > n));
     AQS_ASSERT(L->t.nodes[nd->a].parent == n && L->t.nodes[nd->b].parent == n);
     /* the node's blocks inside the pooled coefficients */
-    AQS_ASSERT(nd_lam(nd) >= 0 && nd_lam(nd) + 36 * (int64_t)nd->nh * nd->nh <= L->t.ndata);
-    AQS_ASSERT(nd->rank >= 0 && nd->rank <= 6 * nd->nh);
+    AQS_ASSERT(nd_lam(nd) >= 0 && nd_lam(nd) + 6 * (int64_t)nd->nh * nd->lld <= L->t.ndata);
+    AQS_ASSERT(nd->rank >= 0 && nd->rank <= 6 * nd->nh && nd->lld <= 6 * nd->nh);
     AQS_ASSERT(L->t.nodes[nd->a].jw <= L->t.nodes[nd->a].rank && L->t.nodes[nd->b].jw <= L->t.nodes[nd->b].rank);
     AQS_ASSERT(nd_xf(nd) >= 0 && nd_xf(nd) + 6 * (int64_t)nd->nh <= L->t.ndata);
     AQS_ASSERT(nd->nh <= L->t.max_handles);
     if (dca_node_update(L, n) != 0)
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
+    /* Lambda is stored at its rank, with row stride rank: the structural rank layout()
+     * gave it room for (the inverse-inertia form keeps Phi, lld = 6nh) */
+    AQS_ASSERT(L->dca_form == AQS_DCA_FORM_PHI ? nd->lld == 6 * nd->nh : nd->rank == nd->lld);
     if (L->wb) worldbound_node_update(L, n); /* its bodies' sphere */
     if (L->t.tdata) {
         solve_state *s = &L->s;

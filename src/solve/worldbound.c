@@ -112,7 +112,7 @@ static aqs_status all_paths(aqs_linkage *L, const char *fn)
 {
     struct worldbound *w = L->wb;
     const model *m = &L->m;
-    double *pl = lk_calloc(L, 2 * ((size_t)m->ncomp + 1), sizeof(double)), *pa;
+    double *pl = lk_calloc_in(L, LK_MEM_WORLD, 2 * ((size_t)m->ncomp + 1), sizeof(double)), *pa;
     int32_t i;
     if (!pl) {
         worldbound_free(L);
@@ -147,20 +147,20 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     size_t nn = (size_t)t->nnodes + 1;
     int32_t *size, n, b, h;
     if (L->wb) return AQS_OK;
-    w = lk_calloc(L, 1, sizeof *w);
+    w = lk_calloc_in(L, LK_MEM_WORLD, 1, sizeof *w);
     if (!w) return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     L->wb = w;
-    w->sph = lk_calloc(L, 4 * nn, sizeof(double));
-    w->sl2 = lk_calloc(L, nn, sizeof(double));
-    w->sa2 = lk_calloc(L, nn, sizeof(double));
-    w->lmax = lk_calloc(L, nn, sizeof(double));
-    w->hl2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
-    w->ha2 = lk_calloc(L, (size_t)t->nhandles + 1, sizeof(double));
-    w->holds = lk_calloc(L, nn, 1);
-    w->wpose = lk_calloc(L, nn, sizeof(pose));
-    w->ell = lk_calloc(L, (size_t)L->nbodies + 1, sizeof(double));
-    w->beyond = lk_calloc(L, nn, sizeof(double));
-    size = w->size = lk_calloc(L, nn, sizeof(int32_t));
+    w->sph = lk_calloc_in(L, LK_MEM_WORLD, 4 * nn, sizeof(double));
+    w->sl2 = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(double));
+    w->sa2 = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(double));
+    w->lmax = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(double));
+    w->hl2 = lk_calloc_in(L, LK_MEM_WORLD, (size_t)t->nhandles + 1, sizeof(double));
+    w->ha2 = lk_calloc_in(L, LK_MEM_WORLD, (size_t)t->nhandles + 1, sizeof(double));
+    w->holds = lk_calloc_in(L, LK_MEM_WORLD, nn, 1);
+    w->wpose = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(pose));
+    w->ell = lk_calloc_in(L, LK_MEM_WORLD, (size_t)L->nbodies + 1, sizeof(double));
+    w->beyond = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(double));
+    size = w->size = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(int32_t));
     if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !w->beyond || !size) {
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
@@ -352,7 +352,6 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
     const double *b = t->data + nd->bv + 6 * i, *x = t->data + nd_xf(nd);
-    const int32_t rows = 6 * nd->nh;
     int32_t r, k;
     for (r = 0; r < 6; r++) {
         double s = b[r], m = fabs(b[r]);
@@ -366,7 +365,7 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
                 }
             }
         } else {
-            const double *lr = t->data + nd_lam(nd) + (int64_t)(6 * i + r) * rows;
+            const double *lr = t->data + nd_lam(nd) + (int64_t)(6 * i + r) * nd->lld;
             for (k = 0; k < nd->rank; k++) {
                 s += lr[k] * lw[k];
                 m += fabs(lr[k]) * lwa[k];
@@ -425,7 +424,7 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     if (L->dca_form != AQS_DCA_FORM_PHI) {
         for (k = 0; k < nd->rank; k++) lw[k] = lwa[k] = 0.0;
         for (r = 0; r < rows; r++) {
-            const double *lr = t->data + nd_lam(nd) + (int64_t)r * rows;
+            const double *lr = t->data + nd_lam(nd) + (int64_t)r * nd->lld;
             for (k = 0; k < nd->rank; k++) {
                 lw[k] += lr[k] * x[r];
                 lwa[k] += fabs(lr[k] * x[r]);

@@ -24,6 +24,7 @@ REQUIRED = {
     "nodes_updated": float, "nodes_processed": float, "displacement_error": (int, float),
     "max_error_bound": (int, float), "ratio_R": float, "peak_rss_bytes": int,
     "exact_linkage_bytes": int, "adaptive_linkage_bytes": int, "finalize_s": float,
+    "exact_rss_bytes": int, "adaptive_rss_bytes": int,
     "fallback": (int, float), "fallback_steps": int,
     "prediction": (int, float), "nodes_predicted": (int, float), "factors_updated": (int, float),
     "dca_form": str,
@@ -94,6 +95,8 @@ def test_consistency(lines):
         assert 0 < d["computed_joints"] <= d["max_computed_joints"] <= d["joints"]
         assert d["nodes_processed"] <= d["tree_nodes"]
         assert d["peak_rss_bytes"] > 0
+        # held by each linkage (aqs_linkage_get_memory): the tolerance adds the DCA's storage
+        assert 0 < d["exact_linkage_bytes"] < d["adaptive_linkage_bytes"]
         assert d["displacement_error"] >= 0 and d["max_displacement"] > 0
 
 

@@ -55,17 +55,20 @@ PARAMS = {
     "aqs_alloc_fn": [_lib.alloc_fn], "aqs_free_fn": [_lib.free_fn],
     "aqs_solve_stats *": [ctypes.POINTER(_lib.aqs_solve_stats)],
     "aqs_collision_stats *": [ctypes.POINTER(_lib.aqs_collision_stats)],
+    "aqs_memory_stats *": [ctypes.POINTER(_lib.aqs_memory_stats)],
     "uint32_t": [ctypes.c_uint32], "aqs_contact *": [_lib.contact_p],
     "size_t *": [_lib.size_p],
     "const char *": [ctypes.c_char_p], "const char **": [ctypes.POINTER(ctypes.c_char_p)],
     "aqs_urdf_options *": [_lib.urdf_options_p], "const aqs_urdf_options *": [_lib.urdf_options_p],
 }
 #: C types of struct fields -> the ctypes type that mirrors them.
-FIELD_TYPES = {"uint32_t": ctypes.c_uint32, "int32_t": ctypes.c_int32, "double": ctypes.c_double}
+FIELD_TYPES = {"uint32_t": ctypes.c_uint32, "int32_t": ctypes.c_int32, "double": ctypes.c_double,
+               "uint64_t": ctypes.c_uint64}
 #: Each struct of the header -> its ctypes.Structure.
 STRUCTS = {"aqs_solve_stats": _lib.aqs_solve_stats, "aqs_contact": _lib.aqs_contact,
            "aqs_urdf_options": _lib.aqs_urdf_options,
-           "aqs_collision_stats": _lib.aqs_collision_stats}
+           "aqs_collision_stats": _lib.aqs_collision_stats,
+           "aqs_memory_stats": _lib.aqs_memory_stats}
 
 
 def normalize(c_type):
@@ -135,3 +138,4 @@ def test_structs_match(header):
     assert stats.path.offset == 56 and stats.cost_adaptive.offset == 64 and stats.cost_exact.offset == 72
     assert stats.rounding_bound.offset == 80 and stats.certified.offset == 88
     assert ctypes.sizeof(_lib.aqs_collision_stats) == 32  # eight 4-byte fields
+    assert ctypes.sizeof(_lib.aqs_memory_stats) == 80  # two 4-byte fields, nine 8-byte ones

@@ -103,7 +103,7 @@ def test_close_twice_and_context_manager():
 CALLS = [
     ("set_inertia_check", (False,)), ("set_tree_builder", ("bisection",)), ("add_body", (1.0, (0, 0, 0), np.eye(3))),
     ("add_joint", ("revolute", -1, 0)),
-    ("finalize", ()), ("sizes", ()), ("joint_layout", (0,)), ("tree_stats", ()),
+    ("finalize", ()), ("sizes", ()), ("joint_layout", (0,)), ("tree_stats", ()), ("memory", ()),
     ("set_gravity", ((0, 0, -9.81),)), ("set_body_force", (0, (1, 0, 0))),
     ("clear_body_force", (0,)), ("clear_forces", ()), ("set_joint_force", (0, 1.0)),
     ("solve", ()), ("step", (0.01,)),
@@ -199,6 +199,37 @@ class CountingAllocator:
         assert ptr in self.live, "free of a pointer not allocated here"
         del self.live[ptr]
         self.libc.free(ptr)
+
+
+def test_memory_matches_allocator():
+    """Linkage.memory() against the allocator's own count, at each phase."""
+    allocator = CountingAllocator()
+    L = aqs.Linkage.with_allocator(allocator.alloc, allocator.free)
+
+    def check():
+        m = L.memory()
+        assert m.bytes == sum(allocator.live.values())
+        assert m.blocks == len(allocator.live)
+        assert m.bytes <= m.peak
+        assert m.model + m.tree + m.exact + m.dca + m.factors + m.world + m.collision == m.bytes
+        return m
+
+    assert check().blocks == 1  # the handle
+    for i in range(30):
+        L.add_body(1.0, (0.5, 0, 0), np.eye(3) * 0.1)
+        L.add_joint("revolute", aqs.WORLD if i == 0 else i - 1, i, pos=(1.0, 0, 0))
+    built = check()
+    assert built.tree == built.exact == built.dca == built.factors == 0
+    L.finalize()
+    L.solve()
+    exact = check()
+    assert exact.tree > 0 and exact.exact > 0 and exact.dca == exact.factors == 0
+    L.set_tolerance("rel_joint", 2.0 ** -19)
+    L.solve()
+    adaptive = check()
+    assert adaptive.dca > 0 and adaptive.factors > 0 and adaptive.model == exact.model
+    L.close()
+    assert allocator.live == {}
 
 
 def test_allocator_sees_all_memory():

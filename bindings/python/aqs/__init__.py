@@ -102,7 +102,7 @@ __all__ = [
     "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
     "COLLIDE_LAZY", "COLLIDE_FULL", "COLLIDE_BRUTE", "COLLIDE_MODES", "CONTACT_DTYPE",
-    "CollisionStats",
+    "CollisionStats", "MemoryStats",
     "BodyInertial", "JointDefinition", "load_urdf", "save_urdf", "URDFError",
     "URDFWarning", "JointLimits", "URDF_ROOT_FIXED", "URDF_ROOT_FREE",
 ]
@@ -124,6 +124,10 @@ assert CONTACT_DTYPE.itemsize == ctypes.sizeof(_lib.aqs_contact)
 CollisionStats = collections.namedtuple("CollisionStats", [name for name, _ in
                                                           _lib.aqs_collision_stats._fields_[1:]])
 CollisionStats.__doc__ = "Work of the last collision query (aqs_linkage_get_query_stats)."
+MemoryStats = collections.namedtuple("MemoryStats", [name for name, _ in
+                                                    _lib.aqs_memory_stats._fields_[1:]])
+MemoryStats.__doc__ = ("Memory held by a linkage, bytes (aqs_linkage_get_memory): blocks, bytes, "
+                       "peak, and bytes by category.")
 
 Sizes = collections.namedtuple("Sizes", "bodies joints nq nv")
 Sizes.__doc__ = "Counts of a linkage: bodies, joints, nq (position values), nv (accelerations)."
@@ -646,6 +650,16 @@ class Linkage:
                    ctypes.byref(mean_handles), ctypes.byref(max_handles))
         return dict(nodes=nodes.value, height=height.value, mean_handles=mean_handles.value,
                     max_handles=max_handles.value)
+
+    def memory(self):
+        """Memory held by the linkage, counted through its allocator, any phase
+        (aqs_linkage_get_memory): a MemoryStats (blocks, bytes held now, peak,
+        and by category model, tree, exact, dca, factors, world, collision,
+        which add up to bytes)."""
+        m = _lib.aqs_memory_stats()
+        m.size = ctypes.sizeof(m)
+        self._call("aqs_linkage_get_memory", ctypes.byref(m))
+        return MemoryStats(*(getattr(m, name) for name in MemoryStats._fields))
 
     # -- reading the model back ------------------------------------------------
 

@@ -223,6 +223,24 @@ class aqs_urdf_options(ctypes.Structure):
 urdf_options_p = ctypes.POINTER(aqs_urdf_options)
 
 
+class aqs_memory_stats(ctypes.Structure):
+    """struct aqs_memory_stats, field for field (the caller sets size)."""
+
+    _fields_ = [
+        ("size", ctypes.c_uint32),  # set by the caller: sizeof(aqs_memory_stats)
+        ("blocks", ctypes.c_uint32),
+        ("bytes", ctypes.c_uint64),
+        ("peak", ctypes.c_uint64),
+        ("model", ctypes.c_uint64),
+        ("tree", ctypes.c_uint64),
+        ("exact", ctypes.c_uint64),
+        ("dca", ctypes.c_uint64),
+        ("factors", ctypes.c_uint64),
+        ("world", ctypes.c_uint64),
+        ("collision", ctypes.c_uint64),
+    ]
+
+
 class aqs_collision_stats(ctypes.Structure):
     """struct aqs_collision_stats, field for field (the caller sets size)."""
 
@@ -397,6 +415,7 @@ PROTOTYPES = {
     "aqs_linkage_any_contact": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_get_collision_stats": (status_t, [linkage_p, int32_p, int32_p, int32_p, int32_p]),
     "aqs_linkage_get_query_stats": (status_t, [linkage_p, ctypes.POINTER(aqs_collision_stats)]),
+    "aqs_linkage_get_memory": (status_t, [linkage_p, ctypes.POINTER(aqs_memory_stats)]),
     "aqs_linkage_set_contact_stiffness": (status_t, [linkage_p, ctypes.c_double]),
 }
 
