@@ -712,7 +712,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             const int32_t o = 6 * ci + r;
             for (i = 0; i < 6; i++) FX[(int64_t)i * orows + o] = F6[6 * r + i];
             for (j = 0; j < d; j++) QX[(int64_t)j * orows + o] = Q6[6 * r + j];
-            memcpy(LC + (int64_t)o * orows, L6 + 6 * r, sizeof(double) * (size_t)d);
+            memcpy(LC + (int64_t)o * C->lld, L6 + 6 * r, sizeof(double) * (size_t)d);
             bC[o] = bs[r] + db[r];
         }
     }
