@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "dense.h"
+#include "model.h"
 #include "rounding.h"
 
 /* handles of a node for which the bound beyond held handles is evaluated
@@ -161,7 +162,8 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
     w->ell = lk_calloc_in(L, LK_MEM_WORLD, (size_t)L->nbodies + 1, sizeof(double));
     w->beyond = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(double));
     size = w->size = lk_calloc_in(L, LK_MEM_WORLD, nn, sizeof(int32_t));
-    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !w->beyond || !size) {
+    if (!w->sph || !w->sl2 || !w->sa2 || !w->lmax || !w->hl2 || !w->ha2 || !w->holds || !w->wpose || !w->ell || !w->beyond || !size ||
+        model_inverse_alloc(L) != AQS_OK) { /* comp_accel reads the inverse inertias */
         worldbound_free(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory (world-space bound)", fn);
     }
