@@ -248,6 +248,21 @@ int main(int argc, char **argv)
         }
     }
     if (mem_report) {
+        /* Subnormal accelerations after the last pass: operations on them
+         * cost ~100 cycles each on x86, so they slow the pass (docs/bench.md,
+         * "Scaling") */
+        for (s = 0; s < nsizes; s++) {
+            item *it = &items[s];
+            int32_t nv = 0, i;
+            long sub = 0;
+            double *qdd;
+            if (aqs_linkage_get_sizes(it->L, NULL, NULL, NULL, &nv) != AQS_OK) return fail(it->L, "sizes");
+            qdd = (double *)malloc(sizeof(double) * (size_t)nv + 8);
+            if (!qdd || aqs_linkage_get_accelerations(it->L, qdd, (size_t)nv) != AQS_OK) return fail(it->L, "accelerations");
+            for (i = 0; i < nv; i++) sub += fpclassify(qdd[i]) == FP_SUBNORMAL;
+            printf("%10d joints: %ld of %d accelerations subnormal after the last pass\n", (int)it->joints, sub, (int)nv);
+            free(qdd);
+        }
         /* B/joint held: exact (as timed), then with rel_joint 2^-19 after one
          * solve, by category (aqs_memory_stats) */
         printf("memory per joint (aqs_linkage_get_memory), exact and with rel_joint 2^-19 after one solve\n");

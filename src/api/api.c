@@ -561,11 +561,10 @@ AQS_API aqs_status aqs_linkage_get_memory(const aqs_linkage *cL, aqs_memory_stat
     static const char fn[] = "aqs_linkage_get_memory";
     aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
     aqs_memory_stats full;
+    aqs_status st;
     uint32_t size;
     if (!L) return AQS_EINVAL;
-    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
-    size = stats->size;
-    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    if ((st = check_stats_size(L, fn, stats, &size)) != AQS_OK) return st;
     memset(&full, 0, sizeof full);
     full.size = size;
     full.blocks = (uint32_t)L->mem_blocks;
@@ -1037,9 +1036,7 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     aqs_status st;
     uint32_t size;
     CHECK_LINKAGE(L);
-    CHECK_PTR(L, fn, stats);
-    size = stats->size;
-    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    if ((st = check_stats_size(L, fn, stats, &size)) != AQS_OK) return st;
     if ((st = need_solved(L, fn)) != AQS_OK) return st;
     memset(&full, 0, sizeof full);
     full.size = size;

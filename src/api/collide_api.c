@@ -324,11 +324,10 @@ AQS_API aqs_status aqs_linkage_get_query_stats(const aqs_linkage *cL, aqs_collis
     aqs_linkage *L = (aqs_linkage *)cL; /* only the error message is written */
     const collision *c;
     aqs_collision_stats full;
+    aqs_status st;
     uint32_t size;
     if (!L) return AQS_EINVAL;
-    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
-    size = stats->size;
-    if (size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)size);
+    if ((st = check_stats_size(L, fn, stats, &size)) != AQS_OK) return st;
     memset(&full, 0, sizeof full);
     full.size = size;
     if ((c = L->col) != NULL) {

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "spatial.h"
 
@@ -48,5 +49,13 @@ aqs_status check_finalized(aqs_linkage *L, const char *fn)
 {
     if (!L->finalized)
         return lk_fail(L, AQS_ESTATE, "%s: the linkage is not finalized (call aqs_linkage_finalize)", fn);
+    return AQS_OK;
+}
+
+aqs_status check_stats_size(aqs_linkage *L, const char *fn, const void *stats, uint32_t *size)
+{
+    if (!stats) return lk_fail(L, AQS_EINVAL, "%s: stats is NULL", fn);
+    memcpy(size, stats, sizeof *size); /* each such struct starts with uint32_t size */
+    if (*size < 8) return lk_fail(L, AQS_EINVAL, "%s: stats->size = %u is too small", fn, (unsigned)*size);
     return AQS_OK;
 }

@@ -20,5 +20,9 @@ aqs_status check_unit_quat(aqs_linkage *L, const char *fn, const char *name, con
                            double *norm);
 /* The linkage is finalized (AQS_ESTATE otherwise). */
 aqs_status check_finalized(aqs_linkage *L, const char *fn);
+/* A size-versioned struct of a getter (aqs_solve_stats, aqs_collision_stats,
+ * aqs_memory_stats): stats non-NULL, its first member (uint32_t size, into *size)
+ * at least 8. */
+aqs_status check_stats_size(aqs_linkage *L, const char *fn, const void *stats, uint32_t *size);
 
 #endif
