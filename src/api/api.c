@@ -11,6 +11,7 @@
 #include "aqs.h"
 #include "assembly.h"
 #include "autopath.h"
+#include "fpenv.h"
 #include "check.h"
 #include "collide.h"
 #include "dca.h"
@@ -742,7 +743,7 @@ static int fallback_applies(const aqs_linkage *L)
     return L->fallback > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
 }
 
-static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
+static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
 {
     aqs_status st;
     int fb = fallback_applies(L) && L->fb_left > 0, chose = 0, auto_exact = 0, by_aba;
@@ -794,6 +795,17 @@ static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
     return AQS_OK;
 }
 
+/* A solve with subnormal results flushed to zero (src/base/fpenv.h). */
+static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
+{
+    fpenv e;
+    aqs_status st;
+    fpenv_enter(&e, 1);
+    st = solve_body(L, fn, stepping);
+    fpenv_leave(&e);
+    return st;
+}
+
 AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
 {
     static const char fn[] = "aqs_linkage_solve";
@@ -834,7 +846,7 @@ static aqs_status check_moved_positions(aqs_linkage *L, const char *fn)
     return AQS_OK;
 }
 
-AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
+static aqs_status step_body(aqs_linkage *L, double dt)
 {
     static const char fn[] = "aqs_linkage_step";
     aqs_status st;
@@ -872,6 +884,16 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
+    return st;
+}
+
+AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)
+{
+    fpenv e;
+    aqs_status st;
+    fpenv_enter(&e, 1);
+    st = step_body(L, dt);
+    fpenv_leave(&e);
     return st;
 }
 
@@ -1022,7 +1044,12 @@ AQS_API aqs_status aqs_linkage_refine(aqs_linkage *L, double eps)
         return lk_fail(L, AQS_ESTATE,
                        "%s: positions, loads or the tolerance changed since the last solve; solve again", fn);
     if (L->s.all || eps >= L->s.bound) return AQS_OK;
-    adaptive_refine(L, eps);
+    {
+        fpenv e;
+        fpenv_enter(&e, 1); /* as a solve (src/base/fpenv.h) */
+        adaptive_refine(L, eps);
+        fpenv_leave(&e);
+    }
     L->s.eps = eps;
     if ((st = check_outputs(L, fn)) != AQS_OK) stale_solve_failed(L);
     return st;

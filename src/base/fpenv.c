@@ -1,0 +1,34 @@
+/* fpenv.c -- flush-to-zero for the duration of a solve (src/base/fpenv.h). */
+#include "fpenv.h"
+
+#if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
+#include <xmmintrin.h>
+#define FPENV_SSE 1
+#endif
+
+void fpenv_enter(fpenv *e, int on)
+{
+    e->saved = 0;
+    e->changed = 0;
+#ifdef FPENV_SSE
+    if (on) {
+        const unsigned int c = _mm_getcsr();
+        if (!(c & _MM_FLUSH_ZERO_ON)) { /* FTZ only: subnormal inputs keep their values */
+            e->saved = c;
+            e->changed = 1;
+            _mm_setcsr(c | _MM_FLUSH_ZERO_ON);
+        }
+    }
+#else
+    (void)on;
+#endif
+}
+
+void fpenv_leave(const fpenv *e)
+{
+#ifdef FPENV_SSE
+    if (e->changed) _mm_setcsr(e->saved);
+#else
+    (void)e;
+#endif
+}
