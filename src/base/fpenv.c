@@ -8,13 +8,11 @@
 
 void fpenv_enter(fpenv *e, int on)
 {
-    e->saved = 0;
     e->changed = 0;
 #ifdef FPENV_SSE
     if (on) {
         const unsigned int c = _mm_getcsr();
         if (!(c & _MM_FLUSH_ZERO_ON)) { /* FTZ only: subnormal inputs keep their values */
-            e->saved = c;
             e->changed = 1;
             _mm_setcsr(c | _MM_FLUSH_ZERO_ON);
         }
@@ -27,7 +25,9 @@ void fpenv_enter(fpenv *e, int on)
 void fpenv_leave(const fpenv *e)
 {
 #ifdef FPENV_SSE
-    if (e->changed) _mm_setcsr(e->saved);
+    /* only the bit set: the exception flags the solve raised stay raised,
+     * as they would without it */
+    if (e->changed) _mm_setcsr(_mm_getcsr() & ~(unsigned int)_MM_FLUSH_ZERO_ON);
 #else
     (void)e;
 #endif

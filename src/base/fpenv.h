@@ -5,19 +5,20 @@
  * costs about a hundred times a normal one, and a linkage loaded at one end
  * has accelerations decaying through the tree into that range (42 % of the
  * 50,000-joint molecule's under one 1 N force). The caller's environment is
- * restored on return, on every path; inputs are read as they are. Where the
+ * restored on return, on every path; inputs are read as they are (no
+ * denormals-are-zero). Where the
  * target has no flush-to-zero control these are no-ops. */
 #ifndef AQS_FPENV_H
 #define AQS_FPENV_H
 
 typedef struct {
-    unsigned int saved; /* the caller's control word */
     int changed;        /* whether fpenv_leave must restore it */
 } fpenv;
 
 /* Turn flush-to-zero on (if `on`) and remember the caller's setting. */
 void fpenv_enter(fpenv *e, int on);
-/* Restore the caller's setting. */
+/* Restore the caller's setting (the flush-to-zero bit only: the exception
+ * flags raised meanwhile stay, as they would without it). */
 void fpenv_leave(const fpenv *e);
 
 #endif
