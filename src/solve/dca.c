@@ -534,14 +534,11 @@ static int small_cholesky(double *D, int32_t d)
  * mass properties in one frame; JA, JB their mp_factor. */
 static int rigid_join_wanted(const double *mpA, const double *mpB, const double JA[9], const double JB[9])
 {
-    double trA = 0.0, trB = 0.0, e2 = 0.0;
-    int32_t i;
-    for (i = 0; i < 9; i++) {
-        trA += JA[i] * JA[i];
-        trB += JB[i] * JB[i];
-    }
-    for (i = 1; i < 4; i++) e2 += (mpB[i] - mpA[i]) * (mpB[i] - mpA[i]);
-    return (trA > trB ? trA : trB) * (mpA[0] * mpB[0] / (mpA[0] + mpB[0])) * e2 > RJ_RATIO;
+    /* Jc is upper triangular (mp_factor): its six entries on and above the diagonal */
+    const double trA = JA[0] * JA[0] + JA[1] * JA[1] + JA[2] * JA[2] + JA[4] * JA[4] + JA[5] * JA[5] + JA[8] * JA[8];
+    const double trB = JB[0] * JB[0] + JB[1] * JB[1] + JB[2] * JB[2] + JB[4] * JB[4] + JB[5] * JB[5] + JB[8] * JB[8];
+    const double e0 = mpB[1] - mpA[1], e1 = mpB[2] - mpA[2], e2 = mpB[3] - mpA[3];
+    return (trA > trB ? trA : trB) * (mpA[0] * mpB[0]) * (e0 * e0 + e1 * e1 + e2 * e2) > RJ_RATIO * (mpA[0] + mpB[0]);
 }
 
 /* Node n's update in inertia form (both children rigid and not grounded): the
@@ -746,7 +743,9 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
  * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
  * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
  * composite inertia is not positive definite or the joint cannot take a
- * constraint force (Lc singular). */
+ * constraint force (Lc singular); 1, having written nothing but the composite
+ * inertia, when both sides are rigid and rigid_join_wanted: the caller then
+ * takes rigid_join (called from there, so that it is not inlined here). */
 static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
                       const double *Q)
 {
@@ -813,8 +812,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             mp_y(JB, sB, IB + 1, YB);
             for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
         }
-        if (rA == 0 && rB == 0 && !C->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
-            return rigid_join(L, n, S, d, beta, Q);
+        if (rA == 0 && rB == 0 && !A->grounded && !B->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
+            return 1; /* the caller takes rigid_join */
         memcpy(cF, (wa >= wb ? IA : IB) + 1, sizeof cF);
         for (i = 0; i < 3; i++) {
             cA[i] = IA[1 + i] - cF[i];
@@ -1017,7 +1016,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     joint_subspace(jd, q, S);
     spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
     for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
-    return hybrid_phi(L, n, S, C->d, beta, Q);
+    i = hybrid_phi(L, n, S, C->d, beta, Q);
+    return i == 1 ? rigid_join(L, n, S, C->d, beta, Q) : i;
 }
 
 /* M W g = (W M^T)^T g = FX^T g. */
