@@ -76,8 +76,7 @@ void dense_symmetrize(double *A, int n)
         }
 }
 
-/* In-place lower Cholesky factor; 0 on success, -1 at a non-positive pivot. */
-static int cholesky(double *L, int n)
+int dense_cholesky(double *L, int n)
 {
     int i, j, k;
     for (j = 0; j < n; j++) {
@@ -100,7 +99,7 @@ static int inverse_cholesky(const double *A, double *out, int n)
     double L[36], Linv[36];
     int i, j, k;
     memcpy(L, A, sizeof(double) * n * n);
-    if (cholesky(L, n) != 0) return -1;
+    if (dense_cholesky(L, n) != 0) return -1;
     /* Linv = L^{-1} (lower), then out = Linv^T Linv. */
     for (i = 0; i < n * n; i++) Linv[i] = 0.0;
     for (j = 0; j < n; j++) {

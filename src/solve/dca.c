@@ -502,30 +502,31 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
  * u/sqrt(k), never appears; the spin about the joint axis enters as the
  * inertia k + m r^2 in D. */
 
+/* The frames of node n's join: Pk (B's frame in C's = A's frame) and Pkb (k's
+ * child frame in C's), and B's mass properties in C's frame (IB). -1 when a
+ * frame is farther out than 1e150 m: no digit of the metre-sized geometry is
+ * left (and m r^2 overflows past 1e154), numerically singular, as the
+ * articulated-body and the inverse-inertia forms find by overflow. */
+static int join_frames(const tree *t, const node *C, pose *Pk, pose *Pkb, double IB[13])
+{
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *P = t->poses + C->poses;
+    int32_t ci;
+    pose_compose(t->poses + A->poses + C->ka, t->poses + nd_J(C), Pk);
+    pose_compose(Pk, t->poses + B->poses + C->kb, Pkb);
+    for (ci = 0; ci <= C->nh; ci++) {
+        const double *p = ci < C->nh ? P[ci].p : Pkb->p;
+        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
+    }
+    memset(IB, 0, 13 * sizeof(double));
+    model_mass_add_posed(IB, Pk, t->data + nd_ic(B));
+    return 0;
+}
+
 /* The sides' mobility is dominated by a near-free rotation: a side's
  * rotational mobility (trace Ic^-1) times the mass and squared distance of the
  * other side's centre of mass (the lever the joint adds), above RJ_RATIO. */
 #define RJ_RATIO 1e3
-
-/* Cholesky of the d x d SPD matrix D (d <= 6) in place (lower). -1 if not PD. */
-static int small_cholesky(double *D, int32_t d)
-{
-    int32_t i, j, k;
-    for (j = 0; j < d; j++) {
-        double s = D[d * j + j];
-        for (k = 0; k < j; k++) s -= D[d * j + k] * D[d * j + k];
-        if (!(s > 0.0) || !isfinite(s)) return -1;
-        s = sqrt(s);
-        D[d * j + j] = s;
-        for (i = j + 1; i < d; i++) {
-            double x = D[d * i + j];
-            for (k = 0; k < j; k++) x -= D[d * i + k] * D[d * j + k];
-            D[d * i + j] = x / s;
-        }
-        for (i = 0; i < j; i++) D[d * i + j] = 0.0;
-    }
-    return 0;
-}
 
 /* 1 if a join of two rigid sides takes the inertia form (rigid_join): a side's
  * rotational mobility trace(Ic^-1) = |Jc|^2 times the reduced mass and the
@@ -551,8 +552,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     tree *t = &L->t;
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
-    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
-    const pose *J = t->poses + nd_J(C);
+    const pose *PB = t->poses + B->poses, *P = t->poses + C->poses;
     const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C), *bC = t->data + C->bv;
@@ -565,14 +565,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     pose Pk, Pkb, Kin, PBi, Ph;
     int32_t i, j, r, s, ci;
 
-    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
-    pose_compose(&Pk, &PB[C->kb], &Pkb); /* K (k's child frame) in C's frame */
-    for (ci = 0; ci <= nh; ci++) { /* as in hybrid_phi: no digit of the geometry left */
-        const double *p = ci < nh ? P[ci].p : Pkb.p;
-        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
-    }
-    memset(IB, 0, sizeof IB);
-    model_mass_add_posed(IB, &Pk, IBb);
+    if (join_frames(t, C, &Pk, &Pkb, IB) != 0) return -1;
     C->grounded = 0;
     memcpy(IC, IA, 13 * sizeof(double));
     model_mass_add(IC, IB[0], IB + 1, IB + 4);
@@ -607,7 +600,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             D[d * r + s] = D[d * s + r] = 0.5 * (x + y);
         }
     memcpy(R, D, sizeof(double) * (size_t)(d * d));
-    if (small_cholesky(R, d) != 0) return -1;
+    if (dense_cholesky(R, d) != 0) return -1; /* R's upper triangle is not read */
     /* Di = D^-1 = R^-T R^-1 */
     for (j = 0; j < d; j++) {
         double e[6] = {0, 0, 0, 0, 0, 0}, y[6];
@@ -752,9 +745,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     tree *t = &L->t;
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
-    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
+    const pose *P = t->poses + C->poses;
     const pose *J = t->poses + nd_J(C);
-    const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
+    const double *IA = t->data + nd_ic(A);
     const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
@@ -774,17 +767,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
 
-    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
-    pose_compose(&Pk, &PB[C->kb], &Pkb);
-    /* Frames farther out than 1e150 m leave no digit of the metre-sized
-     * geometry (and m r^2 overflows past 1e154): numerically singular, as the
-     * articulated-body and the inverse-inertia forms find by overflow. */
-    for (ci = 0; ci <= nh; ci++) {
-        const double *p = ci < nh ? P[ci].p : Pkb.p;
-        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
-    }
-    memset(IB, 0, sizeof IB);
-    model_mass_add_posed(IB, &Pk, IBb);
+    if (join_frames(t, C, &Pk, &Pkb, IB) != 0) return -1;
     C->grounded = A->grounded || B->grounded;
     memset(IC, 0, 13 * sizeof(double));
     if (!C->grounded) {
