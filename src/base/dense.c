@@ -76,7 +76,8 @@ void dense_symmetrize(double *A, int n)
         }
 }
 
-int dense_cholesky(double *L, int n)
+/* In-place lower Cholesky factor; 0 on success, -1 at a non-positive pivot. */
+static int cholesky(double *L, int n)
 {
     int i, j, k;
     for (j = 0; j < n; j++) {
@@ -99,7 +100,7 @@ static int inverse_cholesky(const double *A, double *out, int n)
     double L[36], Linv[36];
     int i, j, k;
     memcpy(L, A, sizeof(double) * n * n);
-    if (dense_cholesky(L, n) != 0) return -1;
+    if (cholesky(L, n) != 0) return -1;
     /* Linv = L^{-1} (lower), then out = Linv^T Linv. */
     for (i = 0; i < n * n; i++) Linv[i] = 0.0;
     for (j = 0; j < n; j++) {

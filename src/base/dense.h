@@ -21,9 +21,6 @@ void dense_symmetrize(double *A, int n);
  * non-positive pivot (MATH.md §3.8). Returns 0, or -1 if A is singular or
  * the result is not finite. out may alias A. */
 int dense_spd_inverse(const double *A, double *out, int n);
-/* In-place lower Cholesky factor of the n x n SPD L (the upper triangle is left
- * as it was and not read); 0 on success, -1 at a non-positive pivot. */
-int dense_cholesky(double *L, int n);
 
 
 /* Fixed-size 6x6 kernels (the hot path): the compiler unrolls them. */

@@ -507,7 +507,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
  * frame is farther out than 1e150 m: no digit of the metre-sized geometry is
  * left (and m r^2 overflows past 1e154), numerically singular, as the
  * articulated-body and the inverse-inertia forms find by overflow. */
-static int join_frames(const tree *t, const node *C, pose *Pk, pose *Pkb, double IB[13])
+static inline int join_frames(const tree *t, const node *C, pose *Pk, pose *Pkb, double IB[13])
 {
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const pose *P = t->poses + C->poses;
@@ -590,6 +590,10 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     dense_mul(Pa, S, PaS, 6, 6, d);
     dense_mul(Pb, S, PbS, 6, 6, d);
     dense_mul(Ia, PbS, VS, 6, 6, d);
+    /* D (d x d) in the top left of the 6 x 6 D = [D 0; 0 1]: its Cholesky
+     * factor R and inverse Di have the same blocks (stride 6) */
+    memset(D, 0, sizeof D);
+    for (r = d; r < 6; r++) D[7 * r] = 1.0;
     for (r = 0; r < d; r++)
         for (s = 0; s <= r; s++) {
             double x = 0.0, y = 0.0;
@@ -597,30 +601,15 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 x += S[i * d + r] * VS[i * d + s];
                 y += S[i * d + s] * VS[i * d + r];
             }
-            D[d * r + s] = D[d * s + r] = 0.5 * (x + y);
+            D[6 * r + s] = D[6 * s + r] = 0.5 * (x + y);
         }
-    memcpy(R, D, sizeof(double) * (size_t)(d * d));
-    if (dense_cholesky(R, d) != 0) return -1; /* R's upper triangle is not read */
-    /* Di = D^-1 = R^-T R^-1 */
-    for (j = 0; j < d; j++) {
-        double e[6] = {0, 0, 0, 0, 0, 0}, y[6];
-        e[j] = 1.0;
-        for (i = 0; i < d; i++) { /* R y = e */
-            double x = e[i];
-            for (s = 0; s < i; s++) x -= R[d * i + s] * y[s];
-            y[i] = x / R[d * i + i];
-        }
-        for (i = d - 1; i >= 0; i--) { /* R^T z = y */
-            double x = y[i];
-            for (s = i + 1; s < d; s++) x -= R[d * s + i] * Di[d * s + j];
-            Di[d * i + j] = x / R[d * i + i];
-        }
-    }
+    if (dense_cholesky6(D, R) != 0) return -1;
+    dense_cholesky6_inverse(R, Di);
     /* U = D^-1 (V S)^T (d x 6); Pr = 1 - U^T S^T; W = Pr V (for the rounding estimate) */
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
             double x = 0.0;
-            for (s = 0; s < d; s++) x += Di[d * r + s] * VS[j * d + s];
+            for (s = 0; s < d; s++) x += Di[6 * r + s] * VS[j * d + s];
             U[6 * r + j] = x;
         }
     for (i = 0; i < 6; i++)
@@ -635,7 +624,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     dense_matvec6(T6, beta, Vb);
     for (r = 0; r < d; r++) {
         double x = 0.0;
-        for (s = 0; s < d; s++) x += Di[d * r + s] * Q[s];
+        for (s = 0; s < d; s++) x += Di[6 * r + s] * Q[s];
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
         if (!isfinite(x)) return -1;
         rho[r] = x;
@@ -661,17 +650,17 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         for (j = 0; j < d; j++) { /* row i of (P S) R^-T: solve R y = (P S)_i^T */
             double xa = -PbS[i * d + j], xb = PaS[i * d + j];
             for (s = 0; s < j; s++) {
-                xa -= R[d * j + s] * La[6 * i + s];
-                xb -= R[d * j + s] * Lb[6 * i + s];
+                xa -= R[6 * j + s] * La[6 * i + s];
+                xb -= R[6 * j + s] * Lb[6 * i + s];
             }
-            La[6 * i + j] = xa / R[d * j + j];
-            Lb[6 * i + j] = xb / R[d * j + j];
+            La[6 * i + j] = xa / R[7 * j];
+            Lb[6 * i + j] = xb / R[7 * j];
         }
         for (j = 0; j < d; j++) {
             double xa = 0.0, xb = 0.0;
             for (s = 0; s < d; s++) {
-                xa += PbS[i * d + s] * Di[d * s + j];
-                xb -= PaS[i * d + s] * Di[d * s + j];
+                xa += PbS[i * d + s] * Di[6 * s + j];
+                xb -= PaS[i * d + s] * Di[6 * s + j];
             }
             Qa[6 * i + j] = xa;
             Qb[6 * i + j] = xb;
@@ -707,7 +696,8 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     }
     C->rank = d;
     C->jw = d;
-    memcpy(G2, Di, sizeof(double) * (size_t)(d * d));
+    for (r = 0; r < d; r++)
+        for (s = 0; s < d; s++) G2[d * r + s] = Di[6 * r + s];
     {
         double *bov = t->hscratch; /* the outer handles' b, for the rounding estimate */
         for (ci = 0; ci < nh; ci++) {
@@ -720,7 +710,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double pm = 0.0, dn = 0.0, dt = 0.0;
         for (i = 0; i < 36; i++) pm = fmax(pm, fmax(fabs(Pa[i]), fabs(Pb[i])));
         for (r = 0; r < d; r++) {
-            dn += D[d * r + r];
+            dn += D[7 * r];
             for (i = 0; i < 6; i++) dt += fabs(S[i * d + r] * VS[i * d + r]);
         }
         rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, 0, pm * (dt / dn), bov);
