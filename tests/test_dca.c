@@ -369,13 +369,93 @@ static void test_hub_of_spherical_pendulums(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* Near-free rotations (issue 12, item 1; docs/math.md 4a, "Rigid sides" and "The world's
+ * free joint is joined last"): the exact DCA against the articulated-body algorithm, which
+ * never forms a 1/k mobility and is within ~1e-15 of the __float128 reference on both
+ * models (docs/hardcases.md: at most 1.1e-15 over 13 seeds). Tolerance 2e-14: the DCA
+ * measured at most 4.2e-15 against that reference on these families; the square-root join
+ * alone gave 8.9e-12 (point mass, k = 1e-12) to 1.3e-9 (1e-16) and the floating base with
+ * the world joined first 1.5e-5 (k = 1e-12), so the check fails by orders of magnitude
+ * without the two changes. */
+static void solve_both(aqs_linkage *L, double *aba, double *dca, size_t n)
+{
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, aba, n), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, dca, n), AQS_OK);
+}
+
+static void test_near_free_rotations(void **state)
+{
+    const double ks[] = {1e-8, 1e-12, 1e-16};
+    const double gv[3] = {0, 0, -9.81}, com[3] = {0.5, 0, 0}, c0[3] = {0, 0, 0};
+    const double Il[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
+    size_t ik;
+    (void)state;
+    for (ik = 0; ik < sizeof ks / sizeof ks[0]; ik++) {
+        const double k = ks[ik], Ik[9] = {k, 0, 0, 0, k, 0, 0, 0, k};
+        /* the 6-link chain of hardcases' pointmass family: body 2 is 0.75 kg with inertia k I */
+        {
+            aqs_linkage *L = new_linkage();
+            double q[6] = {0.3, -0.7, 0.9, 0.2, -0.4, 0.8}, aba[6], dca[6], fz[3] = {0.3, 1, 0.5}, pt[3] = {1, 0, 0};
+            int32_t prev = AQS_WORLD, b = -1, i;
+            assert_int_equal(aqs_linkage_set_inertia_check(L, 0), AQS_OK);
+            for (i = 0; i < 6; i++) {
+                assert_int_equal(aqs_body_add(L, i == 2 ? 0.75 : 1.0, com, i == 2 ? Ik : Il, &b), AQS_OK);
+                test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, i ? 1.0 : 0.0, 0, 0, 0, i % 2, 1 - i % 2);
+                prev = b;
+            }
+            assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+            assert_int_equal(aqs_linkage_set_gravity(L, gv), AQS_OK);
+            assert_int_equal(aqs_linkage_set_positions(L, q, 6), AQS_OK);
+            assert_int_equal(aqs_body_set_force(L, prev, fz, pt, NULL), AQS_OK);
+            solve_both(L, aba, dca, 6);
+            assert_true(test_rel_diff(dca, aba, 6) < 2e-14);
+            aqs_linkage_destroy(L);
+        }
+        /* a 1 kg free base with inertia k I and 3 legs of 3 links */
+        {
+            aqs_linkage *L = new_linkage();
+            double q[16], aba[15], dca[15], f[3] = {0.2, -0.5, 0.7}, pt[3] = {1, 0, 0};
+            const double quat[3][4] = {{1, 0, 0, 0}, {0.5, 0.5, 0.5, 0.5}, {0, 0.6, 0, 0.8}};
+            const double pos[3][3] = {{0.1, 0, 0}, {-0.1, 0.15, 0}, {0, -0.05, 0.12}};
+            int32_t base = -1, b = -1, leg, i;
+            assert_int_equal(aqs_linkage_set_inertia_check(L, 0), AQS_OK);
+            assert_int_equal(aqs_body_add(L, 1.0, c0, Ik, &base), AQS_OK);
+            test_add_joint(L, AQS_JOINT_FREE, AQS_WORLD, base, 0, 0, 0, 0, 0, 1);
+            for (leg = 0; leg < 3; leg++) {
+                int32_t prev = base;
+                for (i = 0; i < 3; i++) {
+                    double axis[3] = {0, i % 2, 1 - i % 2}, p1[3] = {1, 0, 0}, id[4] = {1, 0, 0, 0};
+                    assert_int_equal(aqs_body_add(L, 1.0, com, Il, &b), AQS_OK);
+                    assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, prev, b, i ? p1 : pos[leg],
+                                                   i ? id : quat[leg], axis, NULL),
+                                     AQS_OK);
+                    prev = b;
+                }
+                assert_int_equal(aqs_body_set_force(L, prev, f, pt, NULL), AQS_OK);
+            }
+            assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+            assert_int_equal(aqs_linkage_set_gravity(L, gv), AQS_OK);
+            assert_int_equal(aqs_linkage_get_positions(L, q, 16), AQS_OK);
+            for (i = 7; i < 16; i++) q[i] = 0.9 * sin(1.0 + 2.3 * i);
+            assert_int_equal(aqs_linkage_set_positions(L, q, 16), AQS_OK);
+            solve_both(L, aba, dca, 15);
+            assert_true(test_rel_diff(dca, aba, 15) < 2e-14);
+            aqs_linkage_destroy(L);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pendulum),  cmocka_unit_test(test_slider),
         cmocka_unit_test(test_free_body_off_centre), cmocka_unit_test(test_free_fall),
         cmocka_unit_test(test_welding),   cmocka_unit_test(test_step),
-        cmocka_unit_test(test_hub_of_spherical_pendulums),
+        cmocka_unit_test(test_hub_of_spherical_pendulums), cmocka_unit_test(test_near_free_rotations),
     };
     return cmocka_run_group_tests_name("dca", tests, NULL, NULL);
 }

@@ -503,30 +503,31 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
  * u/sqrt(k), never appears; the spin about the joint axis enters as the
  * inertia k + m r^2 in D. */
 
+/* The frames of node n's join: Pk (B's frame in C's = A's frame) and Pkb (k's
+ * child frame in C's), and B's mass properties in C's frame (IB). -1 when a
+ * frame is farther out than 1e150 m: no digit of the metre-sized geometry is
+ * left (and m r^2 overflows past 1e154), numerically singular, as the
+ * articulated-body and the inverse-inertia forms find by overflow. */
+static inline int join_frames(const tree *t, const node *C, pose *Pk, pose *Pkb, double IB[13])
+{
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *P = t->poses + C->poses;
+    int32_t ci;
+    pose_compose(t->poses + A->poses + C->ka, t->poses + nd_J(C), Pk);
+    pose_compose(Pk, t->poses + B->poses + C->kb, Pkb);
+    for (ci = 0; ci <= C->nh; ci++) {
+        const double *p = ci < C->nh ? P[ci].p : Pkb->p;
+        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
+    }
+    memset(IB, 0, 13 * sizeof(double));
+    model_mass_add_posed(IB, Pk, t->data + nd_ic(B));
+    return 0;
+}
+
 /* The sides' mobility is dominated by a near-free rotation: a side's
  * rotational mobility (trace Ic^-1) times the mass and squared distance of the
  * other side's centre of mass (the lever the joint adds), above RJ_RATIO. */
 #define RJ_RATIO 1e3
-
-/* Cholesky of the d x d SPD matrix D (d <= 6) in place (lower). -1 if not PD. */
-static int small_cholesky(double *D, int32_t d)
-{
-    int32_t i, j, k;
-    for (j = 0; j < d; j++) {
-        double s = D[d * j + j];
-        for (k = 0; k < j; k++) s -= D[d * j + k] * D[d * j + k];
-        if (!(s > 0.0) || !isfinite(s)) return -1;
-        s = sqrt(s);
-        D[d * j + j] = s;
-        for (i = j + 1; i < d; i++) {
-            double x = D[d * i + j];
-            for (k = 0; k < j; k++) x -= D[d * i + k] * D[d * j + k];
-            D[d * i + j] = x / s;
-        }
-        for (i = 0; i < j; i++) D[d * i + j] = 0.0;
-    }
-    return 0;
-}
 
 /* 1 if a join of two rigid sides takes the inertia form (rigid_join): a side's
  * rotational mobility trace(Ic^-1) = |Jc|^2 times the reduced mass and the
@@ -535,14 +536,11 @@ static int small_cholesky(double *D, int32_t d)
  * mass properties in one frame; JA, JB their mp_factor. */
 static int rigid_join_wanted(const double *mpA, const double *mpB, const double JA[9], const double JB[9])
 {
-    double trA = 0.0, trB = 0.0, e2 = 0.0;
-    int32_t i;
-    for (i = 0; i < 9; i++) {
-        trA += JA[i] * JA[i];
-        trB += JB[i] * JB[i];
-    }
-    for (i = 1; i < 4; i++) e2 += (mpB[i] - mpA[i]) * (mpB[i] - mpA[i]);
-    return (trA > trB ? trA : trB) * (mpA[0] * mpB[0] / (mpA[0] + mpB[0])) * e2 > RJ_RATIO;
+    /* Jc is upper triangular (mp_factor): its six entries on and above the diagonal */
+    const double trA = JA[0] * JA[0] + JA[1] * JA[1] + JA[2] * JA[2] + JA[4] * JA[4] + JA[5] * JA[5] + JA[8] * JA[8];
+    const double trB = JB[0] * JB[0] + JB[1] * JB[1] + JB[2] * JB[2] + JB[4] * JB[4] + JB[5] * JB[5] + JB[8] * JB[8];
+    const double e0 = mpB[1] - mpA[1], e1 = mpB[2] - mpA[2], e2 = mpB[3] - mpA[3];
+    return (trA > trB ? trA : trB) * (mpA[0] * mpB[0]) * (e0 * e0 + e1 * e1 + e2 * e2) > RJ_RATIO * (mpA[0] + mpB[0]);
 }
 
 /* Node n's update in inertia form (both children rigid and not grounded): the
@@ -555,8 +553,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     tree *t = &L->t;
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
-    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
-    const pose *J = t->poses + nd_J(C);
+    const pose *PB = t->poses + B->poses, *P = t->poses + C->poses;
     const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
     const double *bA = t->data + A->bv, *bB = t->data + B->bv;
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C), *bC = t->data + C->bv;
@@ -569,14 +566,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     pose Pk, Pkb, Kin, PBi, Ph;
     int32_t i, j, r, s, ci;
 
-    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
-    pose_compose(&Pk, &PB[C->kb], &Pkb); /* K (k's child frame) in C's frame */
-    for (ci = 0; ci <= nh; ci++) { /* as in hybrid_phi: no digit of the geometry left */
-        const double *p = ci < nh ? P[ci].p : Pkb.p;
-        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
-    }
-    memset(IB, 0, sizeof IB);
-    model_mass_add_posed(IB, &Pk, IBb);
+    if (join_frames(t, C, &Pk, &Pkb, IB) != 0) return -1;
     C->grounded = 0;
     memcpy(IC, IA, 13 * sizeof(double));
     model_mass_add(IC, IB[0], IB + 1, IB + 4);
@@ -601,6 +591,10 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     dense_mul(Pa, S, PaS, 6, 6, d);
     dense_mul(Pb, S, PbS, 6, 6, d);
     dense_mul(Ia, PbS, VS, 6, 6, d);
+    /* D (d x d) in the top left of the 6 x 6 D = [D 0; 0 1]: its Cholesky
+     * factor R and inverse Di have the same blocks (stride 6) */
+    memset(D, 0, sizeof D);
+    for (r = d; r < 6; r++) D[7 * r] = 1.0;
     for (r = 0; r < d; r++)
         for (s = 0; s <= r; s++) {
             double x = 0.0, y = 0.0;
@@ -608,30 +602,15 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 x += S[i * d + r] * VS[i * d + s];
                 y += S[i * d + s] * VS[i * d + r];
             }
-            D[d * r + s] = D[d * s + r] = 0.5 * (x + y);
+            D[6 * r + s] = D[6 * s + r] = 0.5 * (x + y);
         }
-    memcpy(R, D, sizeof(double) * (size_t)(d * d));
-    if (small_cholesky(R, d) != 0) return -1;
-    /* Di = D^-1 = R^-T R^-1 */
-    for (j = 0; j < d; j++) {
-        double e[6] = {0, 0, 0, 0, 0, 0}, y[6];
-        e[j] = 1.0;
-        for (i = 0; i < d; i++) { /* R y = e */
-            double x = e[i];
-            for (s = 0; s < i; s++) x -= R[d * i + s] * y[s];
-            y[i] = x / R[d * i + i];
-        }
-        for (i = d - 1; i >= 0; i--) { /* R^T z = y */
-            double x = y[i];
-            for (s = i + 1; s < d; s++) x -= R[d * s + i] * Di[d * s + j];
-            Di[d * i + j] = x / R[d * i + i];
-        }
-    }
+    if (dense_cholesky6(D, R) != 0) return -1;
+    dense_cholesky6_inverse(R, Di);
     /* U = D^-1 (V S)^T (d x 6); Pr = 1 - U^T S^T; W = Pr V (for the rounding estimate) */
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
             double x = 0.0;
-            for (s = 0; s < d; s++) x += Di[d * r + s] * VS[j * d + s];
+            for (s = 0; s < d; s++) x += Di[6 * r + s] * VS[j * d + s];
             U[6 * r + j] = x;
         }
     for (i = 0; i < 6; i++)
@@ -646,7 +625,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     dense_matvec6(T6, beta, Vb);
     for (r = 0; r < d; r++) {
         double x = 0.0;
-        for (s = 0; s < d; s++) x += Di[d * r + s] * Q[s];
+        for (s = 0; s < d; s++) x += Di[6 * r + s] * Q[s];
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
         if (!isfinite(x)) return -1;
         rho[r] = x;
@@ -672,17 +651,17 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         for (j = 0; j < d; j++) { /* row i of (P S) R^-T: solve R y = (P S)_i^T */
             double xa = -PbS[i * d + j], xb = PaS[i * d + j];
             for (s = 0; s < j; s++) {
-                xa -= R[d * j + s] * La[6 * i + s];
-                xb -= R[d * j + s] * Lb[6 * i + s];
+                xa -= R[6 * j + s] * La[6 * i + s];
+                xb -= R[6 * j + s] * Lb[6 * i + s];
             }
-            La[6 * i + j] = xa / R[d * j + j];
-            Lb[6 * i + j] = xb / R[d * j + j];
+            La[6 * i + j] = xa / R[7 * j];
+            Lb[6 * i + j] = xb / R[7 * j];
         }
         for (j = 0; j < d; j++) {
             double xa = 0.0, xb = 0.0;
             for (s = 0; s < d; s++) {
-                xa += PbS[i * d + s] * Di[d * s + j];
-                xb -= PaS[i * d + s] * Di[d * s + j];
+                xa += PbS[i * d + s] * Di[6 * s + j];
+                xb -= PaS[i * d + s] * Di[6 * s + j];
             }
             Qa[6 * i + j] = xa;
             Qb[6 * i + j] = xb;
@@ -718,7 +697,8 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     }
     C->rank = d;
     C->jw = d;
-    memcpy(G2, Di, sizeof(double) * (size_t)(d * d));
+    for (r = 0; r < d; r++)
+        for (s = 0; s < d; s++) G2[d * r + s] = Di[6 * r + s];
     {
         double *bov = t->hscratch; /* the outer handles' b, for the rounding estimate */
         for (ci = 0; ci < nh; ci++) {
@@ -731,7 +711,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double pm = 0.0, dn = 0.0, dt = 0.0;
         for (i = 0; i < 36; i++) pm = fmax(pm, fmax(fabs(Pa[i]), fabs(Pb[i])));
         for (r = 0; r < d; r++) {
-            dn += D[d * r + r];
+            dn += D[7 * r];
             for (i = 0; i < 6; i++) dt += fabs(S[i * d + r] * VS[i * d + r]);
         }
         rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, 0, pm * (dt / dn), bov);
@@ -747,16 +727,18 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
  * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
  * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
  * composite inertia is not positive definite or the joint cannot take a
- * constraint force (Lc singular). */
+ * constraint force (Lc singular); 1, having written nothing but the composite
+ * inertia, when both sides are rigid and rigid_join_wanted: the caller then
+ * takes rigid_join (called from there, so that it is not inlined here). */
 static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
                       const double *Q)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
-    const pose *PA = t->poses + A->poses, *PB = t->poses + B->poses, *P = t->poses + C->poses;
+    const pose *P = t->poses + C->poses;
     const pose *J = t->poses + nd_J(C);
-    const double *IA = t->data + nd_ic(A), *IBb = t->data + nd_ic(B);
+    const double *IA = t->data + nd_ic(A);
     const double *LA = t->data + nd_lam(A), *LB = t->data + nd_lam(B);
     double *IC = t->data + nd_ic(C), *LC = t->data + nd_lam(C);
     const int32_t nA = A->nh, nB = B->nh, nh = C->nh, nAo = nA - 1, rA = A->rank, rB = B->rank;
@@ -777,17 +759,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     pose Pk, Pkb, PkbF, *PF = (pose *)(t->hscratch + (int64_t)(6 * t->max_handles + 14) * (12 * t->max_handles + 6));
     int32_t i, j, r, q, ci, rank;
 
-    pose_compose(&PA[C->ka], J, &Pk); /* B's frame in C's (= A's) frame */
-    pose_compose(&Pk, &PB[C->kb], &Pkb);
-    /* Frames farther out than 1e150 m leave no digit of the metre-sized
-     * geometry (and m r^2 overflows past 1e154): numerically singular, as the
-     * articulated-body and the inverse-inertia forms find by overflow. */
-    for (ci = 0; ci <= nh; ci++) {
-        const double *p = ci < nh ? P[ci].p : Pkb.p;
-        if (!(fabs(p[0]) < 1e150 && fabs(p[1]) < 1e150 && fabs(p[2]) < 1e150)) return -1;
-    }
-    memset(IB, 0, sizeof IB);
-    model_mass_add_posed(IB, &Pk, IBb);
+    if (join_frames(t, C, &Pk, &Pkb, IB) != 0) return -1;
     C->grounded = A->grounded || B->grounded;
     memset(IC, 0, 13 * sizeof(double));
     if (!C->grounded) {
@@ -815,8 +787,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             mp_y(JB, sB, IB + 1, YB);
             for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
         }
-        if (rA == 0 && rB == 0 && !C->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
-            return rigid_join(L, n, S, d, beta, Q);
+        if (rA == 0 && rB == 0 && !A->grounded && !B->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
+            return 1; /* the caller takes rigid_join */
         memcpy(cF, (wa >= wb ? IA : IB) + 1, sizeof cF);
         for (i = 0; i < 3; i++) {
             cA[i] = IA[1 + i] - cF[i];
@@ -1019,7 +991,8 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     joint_subspace(jd, q, S);
     spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
     for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
-    return hybrid_phi(L, n, S, C->d, beta, Q);
+    i = hybrid_phi(L, n, S, C->d, beta, Q);
+    return i == 1 ? rigid_join(L, n, S, C->d, beta, Q) : i;
 }
 
 /* M W g = (W M^T)^T g = FX^T g. */
