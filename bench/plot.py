@@ -120,21 +120,23 @@ def displacement(sets, out):
 
 def world_measures(d, out):
     """Speedup over the exact step and N_E against the final displacement error, one panel
-    pair per scene and N_f, a curve per measure (the paper's Figure 8 axis). The latest run
-    of each file is drawn solid; an earlier run's rel_world (the bound before it changed),
-    dashed, when the file holds one with the same N_f."""
+    pair per scene and N_f, a curve per measure (the paper's Figure 8 axis). For each N_f the
+    latest run of the file holding that N_f is drawn solid; the run before it with that N_f,
+    its rel_world (the bound before it changed), dashed."""
     panels = []
     for scene in ("molecule", "chain30", "millipede"):
         path = os.path.join(d, f"world-{scene}.jsonl")
-        rows = load_jsonl(path)
         allrows = load_jsonl(path, latest_run=False)
-        runs = []
-        for r in allrows:
-            if r["run_id"] not in runs:
-                runs.append(r["run_id"])
-        before = [r for r in allrows if len(runs) > 1 and r["run_id"] == runs[-2] and r["metric"] == "rel_world"]
-        for nf, g in by_forces(rows).items():
-            old = [r for r in before if r["forces"] == nf]
+        for nf in sorted({r["forces"] for r in allrows}):
+            runs = []
+            for r in allrows:
+                if r["forces"] == nf and r["run_id"] not in runs:
+                    runs.append(r["run_id"])
+            g = by_forces([r for r in allrows if r["forces"] == nf and r["run_id"] == runs[-1]]).get(nf)
+            if not g:
+                continue
+            old = [r for r in allrows if len(runs) > 1 and r["forces"] == nf and r["run_id"] == runs[-2]
+                   and r["metric"] == "rel_world"]
             panels.append((f"{scene}, N_f = {nf}, {g[0]['steps']} steps", g, old))
     if not panels:
         return False

@@ -11,7 +11,10 @@
  *   beyond held handle h: the rigid motion D_h = a_h - a_entry, exact from
  *            n's coefficients at its handle forces, at the root sphere's
  *            radius: |D_lin(c_0)| + |D_ang| (R_0 + ellmax).
- * max_b e_b <= sum_{queued} E_n. */
+ * max_b e_b <= min(sum_{queued} E_n, max_{queued} E_n + sum_{queued} E_h) (a
+ * body lies inside at most one queued node). The rounding estimate carries
+ * every joint's estimated error to the bodies (worldbound_rounding), and
+ * rel_world's lower bound less its own estimated error is lower_r. */
 #include "worldbound.h"
 
 #include <math.h>
