@@ -514,14 +514,18 @@ static void test_bound_scenes(void **state)
         check_linkage(L, X, 1e-12, &t);
         if (scenes[c].kind == BENCH_SCENE_MILLIPEDE) {
             /* a body lies inside at most one queued node: the legs' inside
-             * bounds are not summed (6,695 joints at 2^-5 before, 300 after) */
+             * bounds are not summed. 6,695 joints at 2^-5 with the sum; with
+             * min(sum, max + beyond) 300 when the world was joined first and
+             * 1,509 now that a world holding only a free joint is joined last
+             * (src/model/assembly.c, for the floating base's accuracy): the
+             * guard is 2,000 */
             aqs_solve_stats st;
             st.size = sizeof st;
             assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, ldexp(1.0, -5)), AQS_OK);
             assert_int_equal(aqs_linkage_solve(L), AQS_OK);
             assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
             print_message("millipede, rel_world 2^-5: %d joints computed\n", st.computed_joints);
-            assert_true(st.computed_joints < 1000);
+            assert_true(st.computed_joints < 2000);
         }
         assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, ldexp(1.0, -15)), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the adaptive solver's bound under test */
