@@ -647,16 +647,23 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     memset(Lb, 0, sizeof Lb);
     memset(Qa, 0, sizeof Qa);
     memset(Qb, 0, sizeof Qb);
-    for (i = 0; i < 6; i++) {
-        for (j = 0; j < d; j++) { /* row i of (P S) R^-T: solve R y = (P S)_i^T */
-            double xa = -PbS[i * d + j], xb = PaS[i * d + j];
-            for (s = 0; s < j; s++) {
-                xa -= R[6 * j + s] * La[6 * i + s];
-                xb -= R[6 * j + s] * Lb[6 * i + s];
+    { /* La^T = R^-1 (-Pb S)^T, Lb^T = R^-1 (Pa S)^T: six right-hand sides
+         each (rows d..5 of R are the identity's and of the sides zero) */
+        double ra[36] = {0}, rb[36] = {0}, wa[36], wb[36];
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < d; j++) {
+                ra[6 * j + i] = -PbS[i * d + j];
+                rb[6 * j + i] = PaS[i * d + j];
             }
-            La[6 * i + j] = xa / R[7 * j];
-            Lb[6 * i + j] = xb / R[7 * j];
-        }
+        dense_cholesky6_lower_solve(R, ra, wa, 6);
+        dense_cholesky6_lower_solve(R, rb, wb, 6);
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < d; j++) {
+                La[6 * i + j] = wa[6 * j + i];
+                Lb[6 * i + j] = wb[6 * j + i];
+            }
+    }
+    for (i = 0; i < 6; i++) {
         for (j = 0; j < d; j++) {
             double xa = 0.0, xb = 0.0;
             for (s = 0; s < d; s++) {
