@@ -13,6 +13,11 @@
 #include "rounding.h"
 #include "stale.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define DCA_SSE2 1
+#endif
+
 static int mp_inverse_factor(const double *mp, double *Y);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
 
@@ -195,6 +200,65 @@ static int mp_inverse_factor(const double *mp, double *Y)
  * mass's 1/k rotational mobility is removed by an orthogonal projection,
  * not by a difference of 1/k-sized terms. */
 
+/* The kernels of reflect_row: each row's dot product summed in column order
+ * from 0.0, each entry updated as a[j] -= s v[j], exactly as the scalar loops
+ * would; with SSE2 two rows' sums share a register (dot2) and two entries of
+ * a row are updated at once (axpy1, axpy4), lane by lane the same IEEE
+ * operations, so the results are bit for bit those of the scalar code
+ * (docs/bench.md, "A cheaper square-root node"). */
+static inline void dot2(const double *a, const double *b, const double *v, int32_t m, double *s, double *t)
+{
+    int32_t j;
+#ifdef DCA_SSE2
+    __m128d acc = _mm_setzero_pd();
+    for (j = 0; j < m; j++)
+        acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), _mm_set1_pd(v[j])));
+    _mm_storel_pd(s, acc);
+    _mm_storeh_pd(t, acc);
+#else
+    double x = 0.0, y = 0.0;
+    for (j = 0; j < m; j++) {
+        x += a[j] * v[j];
+        y += b[j] * v[j];
+    }
+    *s = x;
+    *t = y;
+#endif
+}
+
+static inline void axpy1(double *a, double s, const double *v, int32_t m)
+{
+    int32_t j = 0;
+#ifdef DCA_SSE2
+    const __m128d ss = _mm_set1_pd(s);
+    for (; j + 1 < m; j += 2)
+        _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(ss, _mm_loadu_pd(v + j))));
+#endif
+    for (; j < m; j++) a[j] -= s * v[j];
+}
+
+static inline void axpy4(double *a, double *b, double *g, double *h, double s, double t, double u, double z,
+                         const double *v, int32_t m)
+{
+    int32_t j = 0;
+#ifdef DCA_SSE2
+    const __m128d ss = _mm_set1_pd(s), tt = _mm_set1_pd(t), uu = _mm_set1_pd(u), zz = _mm_set1_pd(z);
+    for (; j + 1 < m; j += 2) {
+        const __m128d vv = _mm_loadu_pd(v + j);
+        _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(ss, vv)));
+        _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(tt, vv)));
+        _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(uu, vv)));
+        _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(zz, vv)));
+    }
+#endif
+    for (; j < m; j++) {
+        a[j] -= s * v[j];
+        b[j] -= t * v[j];
+        g[j] -= u * v[j];
+        h[j] -= z * v[j];
+    }
+}
+
 /* Reflect row r of the row-major A (ld columns) so that its entries in
  * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
  * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
@@ -234,60 +298,36 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
     for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
-        double s = 0.0, t = 0.0, u = 0.0, z = 0.0;
-        for (j = 0; j < m; j++) {
-            s += a[j] * v[j];
-            t += b[j] * v[j];
-            u += g[j] * v[j];
-            z += h[j] * v[j];
-        }
+        double s, t, u, z;
+        dot2(a, b, v, m, &s, &t);
+        dot2(g, h, v, m, &u, &z);
         s *= f;
         t *= f;
         u *= f;
         z *= f;
         if (s != 0.0 && t != 0.0 && u != 0.0 && z != 0.0) {
-            for (j = 0; j < m; j++) {
-                a[j] -= s * v[j];
-                b[j] -= t * v[j];
-                g[j] -= u * v[j];
-                h[j] -= z * v[j];
-            }
+            axpy4(a, b, g, h, s, t, u, z, v, m);
         } else {
-            if (s != 0.0)
-                for (j = 0; j < m; j++) a[j] -= s * v[j];
-            if (t != 0.0)
-                for (j = 0; j < m; j++) b[j] -= t * v[j];
-            if (u != 0.0)
-                for (j = 0; j < m; j++) g[j] -= u * v[j];
-            if (z != 0.0)
-                for (j = 0; j < m; j++) h[j] -= z * v[j];
+            if (s != 0.0) axpy1(a, s, v, m);
+            if (t != 0.0) axpy1(b, t, v, m);
+            if (u != 0.0) axpy1(g, u, v, m);
+            if (z != 0.0) axpy1(h, z, v, m);
         }
     }
     for (; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
-        double *a = A + (int64_t)ld * i + p, *b = a + ld, s = 0.0, t = 0.0;
-        for (j = 0; j < m; j++) {
-            s += a[j] * v[j];
-            t += b[j] * v[j];
-        }
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, s, t;
+        dot2(a, b, v, m, &s, &t);
         s *= f;
         t *= f;
-        if (s != 0.0 && t != 0.0) {
-            for (j = 0; j < m; j++) {
-                a[j] -= s * v[j];
-                b[j] -= t * v[j];
-            }
-        } else if (s != 0.0) {
-            for (j = 0; j < m; j++) a[j] -= s * v[j];
-        } else if (t != 0.0) {
-            for (j = 0; j < m; j++) b[j] -= t * v[j];
-        }
+        if (s != 0.0) axpy1(a, s, v, m);
+        if (t != 0.0) axpy1(b, t, v, m);
     }
     if (i < nrows) {
         double *a = A + (int64_t)ld * i + p, s = 0.0;
         for (j = 0; j < m; j++) s += a[j] * v[j];
         if (s == 0.0) return;
         s *= f;
-        for (j = 0; j < m; j++) a[j] -= s * v[j];
+        axpy1(a, s, v, m);
     }
 }
 
