@@ -489,11 +489,29 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     for (o = 0; o < orows; o++) {
         const double *x1 = X + (int64_t)o * ncol;
         double sb = bo[o];
+#ifdef DCA_SSE2
+        { /* E's rows two entries at a time: each FX entry's sum as below, lane by lane */
+            __m128d f0 = _mm_setzero_pd(), f1 = f0, f2 = f0;
+            for (k = 0; k < c; k++) {
+                const __m128d xk = _mm_set1_pd(x1[k]);
+                f0 = _mm_sub_pd(f0, _mm_mul_pd(_mm_loadu_pd(E + 6 * k), xk));
+                f1 = _mm_sub_pd(f1, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 2), xk));
+                f2 = _mm_sub_pd(f2, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 4), xk));
+            }
+            _mm_storel_pd(FX + o, f0);
+            _mm_storeh_pd(FX + orows + o, f0);
+            _mm_storel_pd(FX + (int64_t)2 * orows + o, f1);
+            _mm_storeh_pd(FX + (int64_t)3 * orows + o, f1);
+            _mm_storel_pd(FX + (int64_t)4 * orows + o, f2);
+            _mm_storeh_pd(FX + (int64_t)5 * orows + o, f2);
+        }
+#else
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
             FX[(int64_t)i * orows + o] = x;
         }
+#endif
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
         for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
         bC[o] = sb;
@@ -979,7 +997,19 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 ix[6 * q + nz[q]++] = r;
             }
         }
-        for (j = 0; j < w; j++) {
+        j = 0;
+#ifdef DCA_SSE2
+        for (; j + 1 < w; j += 2) { /* two columns at a time, each sum as below */
+            __m128d col[6];
+            for (r = 0; r < 6; r++) col[r] = _mm_loadu_pd(rel + ncol * r + j);
+            for (q = 0; q < 6; q++) {
+                __m128d x = _mm_setzero_pd();
+                for (r = 0; r < nz[q]; r++) x = _mm_add_pd(x, _mm_mul_pd(_mm_set1_pd(wt[6 * q + r]), col[ix[6 * q + r]]));
+                _mm_storeu_pd(rel + ncol * q + j, x);
+            }
+        }
+#endif
+        for (; j < w; j++) {
             double col[6];
             for (r = 0; r < 6; r++) col[r] = rel[ncol * r + j];
             for (q = 0; q < 6; q++) {
