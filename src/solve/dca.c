@@ -208,23 +208,31 @@ static int mp_inverse_factor(const double *mp, double *Y)
  * (docs/bench.md, "A cheaper square-root node"). */
 static inline void dot2(const double *a, const double *b, const double *v, int32_t m, double *s, double *t)
 {
-    int32_t j;
-#ifdef DCA_SSE2
-    __m128d acc = _mm_setzero_pd();
-    for (j = 0; j < m; j++)
-        acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), _mm_set1_pd(v[j])));
-    _mm_storel_pd(s, acc);
-    _mm_storeh_pd(t, acc);
-#else
     double x = 0.0, y = 0.0;
+    int32_t j;
     for (j = 0; j < m; j++) {
         x += a[j] * v[j];
         y += b[j] * v[j];
     }
     *s = x;
     *t = y;
-#endif
 }
+
+#ifdef DCA_SSE2
+#define DCA_VDUP 64 /* reflect_row's vectors up to this length are kept broadcast */
+/* dot2 with vd[j] = (v[j], v[j]) */
+static inline void dot2_dup(const double *a, const double *b, const __m128d *vd, int32_t m, double *s, double *t)
+{
+    __m128d acc = _mm_setzero_pd();
+    int32_t j;
+    for (j = 0; j < m; j++) acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), vd[j]));
+    _mm_storel_pd(s, acc);
+    _mm_storeh_pd(t, acc);
+}
+#define DOT2(a, b, s, t) (m <= DCA_VDUP ? dot2_dup(a, b, vd, m, s, t) : dot2(a, b, v, m, s, t))
+#else
+#define DOT2(a, b, s, t) dot2(a, b, v, m, s, t)
+#endif
 
 static inline void axpy1(double *a, double s, const double *v, int32_t m)
 {
@@ -268,6 +276,9 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     const double *x = A + (int64_t)ld * r + p;
     int32_t m = ncol - p, i, j;
     double scale = 0.0, ss = 0.0, alpha, f;
+#ifdef DCA_SSE2
+    __m128d vd[DCA_VDUP];
+#endif
     for (j = 1; j < m; j++)
         if (fabs(x[j]) > scale) scale = fabs(x[j]);
     if (scale == 0.0) return; /* nothing right of the pivot */
@@ -296,11 +307,15 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
+#ifdef DCA_SSE2
+    if (m <= DCA_VDUP)
+        for (j = 0; j < m; j++) vd[j] = _mm_set1_pd(v[j]);
+#endif
     for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
         double s, t, u, z;
-        dot2(a, b, v, m, &s, &t);
-        dot2(g, h, v, m, &u, &z);
+        DOT2(a, b, &s, &t);
+        DOT2(g, h, &u, &z);
         s *= f;
         t *= f;
         u *= f;
@@ -316,7 +331,7 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     }
     for (; i + 1 < nrows; i += 2) { /* two rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, s, t;
-        dot2(a, b, v, m, &s, &t);
+        DOT2(a, b, &s, &t);
         s *= f;
         t *= f;
         if (s != 0.0) axpy1(a, s, v, m);
