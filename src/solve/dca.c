@@ -13,6 +13,11 @@
 #include "rounding.h"
 #include "stale.h"
 
+#if defined(__GNUC__)
+#define DCA_INLINE __attribute__((always_inline)) /* reflect_row_body at fixed sizes */
+#else
+#define DCA_INLINE
+#endif
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #define DCA_SSE2 1
@@ -270,7 +275,7 @@ static inline void axpy4(double *a, double *b, double *g, double *h, double s, d
 /* Reflect row r of the row-major A (ld columns) so that its entries in
  * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
  * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
-static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
+static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
                         int32_t ncol, double *v)
 {
     const double *x = A + (int64_t)ld * r + p;
@@ -344,6 +349,12 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
         s *= f;
         axpy1(a, s, v, m);
     }
+}
+
+static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p, int32_t ncol,
+                        double *v)
+{
+    reflect_row_body(A, ld, r0, nrows, r, p, ncol, v);
 }
 
 /* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
@@ -894,14 +905,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 G[6 * i + j] = YA[6 * i + j];
                 G[6 * i + 3 + j] = YB[6 * i + j];
             }
-        for (i = 0; i < 3; i++) reflect_row(G, 6, i, 6, i, i, 6, vr);
+        reflect_row_body(G, 6, 0, 6, 0, 0, 6, vr);
+        reflect_row_body(G, 6, 1, 6, 1, 1, 6, vr);
+        reflect_row_body(G, 6, 2, 6, 2, 2, 6, vr);
         for (i = 0; i < 3; i++)
             for (j = 0; j < 3; j++) {
                 H[9 * i + j] = i == j ? sA : 0.0;
                 H[9 * i + 3 + j] = G[6 * (3 + i) + 3 + j];
                 H[9 * i + 6 + j] = i == j ? sB : 0.0;
             }
-        for (i = 0; i < 3; i++) reflect_row(H, 9, i, 3, i, i, 9, vr);
+        reflect_row_body(H, 9, 0, 3, 0, 0, 9, vr);
+        reflect_row_body(H, 9, 1, 3, 1, 1, 9, vr);
+        reflect_row_body(H, 9, 2, 3, 2, 2, 9, vr);
         memset(Lm, 0, sizeof Lm);
         for (i = 0; i < 3; i++)
             for (j = 0; j <= i; j++) Lm[6 * i + j] = G[6 * i + j];
