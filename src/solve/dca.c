@@ -435,6 +435,32 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
     const double *R = P->R, *p = P->p;
     const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
     int32_t j;
+#ifdef DCA_SSE2
+    /* two columns at a time: each entry's expression as in the scalar loop below */
+    const __m128d r0 = _mm_set1_pd(R[0]), r1 = _mm_set1_pd(R[1]), r2 = _mm_set1_pd(R[2]), r3 = _mm_set1_pd(R[3]),
+                  r4 = _mm_set1_pd(R[4]), r5 = _mm_set1_pd(R[5]), r6 = _mm_set1_pd(R[6]), r7 = _mm_set1_pd(R[7]),
+                  r8 = _mm_set1_pd(R[8]);
+    for (j = 0; j < 6; j += 2) {
+        const __m128d v0 = _mm_loadu_pd(Z + j), v1 = _mm_loadu_pd(Z + 6 + j), v2 = _mm_loadu_pd(Z + 12 + j);
+        __m128d t0 = _mm_loadu_pd(Z + 18 + j), t1 = _mm_loadu_pd(Z + 24 + j), t2 = _mm_loadu_pd(Z + 30 + j);
+        if (moved) {
+            const __m128d p0 = _mm_set1_pd(p[0]), p1 = _mm_set1_pd(p[1]), p2 = _mm_set1_pd(p[2]);
+            t0 = _mm_sub_pd(t0, _mm_sub_pd(_mm_mul_pd(p1, v2), _mm_mul_pd(p2, v1)));
+            t1 = _mm_sub_pd(t1, _mm_sub_pd(_mm_mul_pd(p2, v0), _mm_mul_pd(p0, v2)));
+            t2 = _mm_sub_pd(t2, _mm_sub_pd(_mm_mul_pd(p0, v1), _mm_mul_pd(p1, v0)));
+        }
+        _mm_storeu_pd(out + j, _mm_add_pd(_mm_add_pd(_mm_mul_pd(r0, v0), _mm_mul_pd(r3, v1)), _mm_mul_pd(r6, v2)));
+        _mm_storeu_pd(out + ld + j, _mm_add_pd(_mm_add_pd(_mm_mul_pd(r1, v0), _mm_mul_pd(r4, v1)), _mm_mul_pd(r7, v2)));
+        _mm_storeu_pd(out + (int64_t)2 * ld + j,
+                      _mm_add_pd(_mm_add_pd(_mm_mul_pd(r2, v0), _mm_mul_pd(r5, v1)), _mm_mul_pd(r8, v2)));
+        _mm_storeu_pd(out + (int64_t)3 * ld + j,
+                      _mm_add_pd(_mm_add_pd(_mm_mul_pd(r0, t0), _mm_mul_pd(r3, t1)), _mm_mul_pd(r6, t2)));
+        _mm_storeu_pd(out + (int64_t)4 * ld + j,
+                      _mm_add_pd(_mm_add_pd(_mm_mul_pd(r1, t0), _mm_mul_pd(r4, t1)), _mm_mul_pd(r7, t2)));
+        _mm_storeu_pd(out + (int64_t)5 * ld + j,
+                      _mm_add_pd(_mm_add_pd(_mm_mul_pd(r2, t0), _mm_mul_pd(r5, t1)), _mm_mul_pd(r8, t2)));
+    }
+#else
     for (j = 0; j < 6; j++) {
         const double v0 = Z[j], v1 = Z[6 + j], v2 = Z[12 + j];
         double t0 = Z[18 + j], t1 = Z[24 + j], t2 = Z[30 + j];
@@ -450,6 +476,7 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
         out[(int64_t)4 * ld + j] = R[1] * t0 + R[4] * t1 + R[7] * t2;
         out[(int64_t)5 * ld + j] = R[2] * t0 + R[5] * t1 + R[8] * t2;
     }
+#endif
 }
 
 
