@@ -953,6 +953,26 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+#ifdef DCA_SSE2
+        { /* the same, A's sums in the low lanes and B's in the high ones */
+            __m128d W[36], Y2[36];
+            for (i = 0; i < 36; i++) Y2[i] = _mm_loadh_pd(_mm_load_sd(YA + i), YB + i);
+            for (j = 0; j < 6; j++)
+                for (i = j < 3 ? 0 : 3; i < 6; i++) {
+                    __m128d x = Y2[6 * i + j];
+                    for (r = j < 3 ? 0 : 3; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Lm[6 * i + r]), W[6 * r + j]));
+                    W[6 * i + j] = _mm_div_pd(x, _mm_set1_pd(Lm[7 * i]));
+                }
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < 6; j++) {
+                    const int32_t re = i < 3 || j < 3 ? 3 : 6;
+                    __m128d x = _mm_setzero_pd();
+                    for (r = 0; r < re; r++) x = _mm_add_pd(x, _mm_mul_pd(Y2[6 * i + r], W[6 * j + r]));
+                    _mm_storel_pd(ZA + 6 * i + j, x);
+                    _mm_storeh_pd(ZB + 6 * i + j, _mm_xor_pd(x, _mm_set1_pd(-0.0))); /* -sb, sign flipped */
+                }
+        }
+#else
         {
             double Wa[36], Wb[36];
             /* Y's upper right 3x3 block is zero, so are Wa's and Wb's (Lm is
@@ -979,6 +999,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                     ZB[6 * i + j] = -sb;
                 }
         }
+#endif
     }
     memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
     for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
