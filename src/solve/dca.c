@@ -1001,7 +1001,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
 #endif
     }
-    memset(M, 0, sizeof(double) * (size_t)rows * (size_t)ncol);
+    /* (M is not cleared: every entry the reflections and the coefficients read is
+     * written below, the other side's columns of the outer rows as zeros; the
+     * constraint and relative rows are read only in their first w columns) */
     for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
     /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
@@ -1011,8 +1013,11 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         la = LA + (int64_t)6 * i * ldA;
         m = X + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
-            memcpy(m + (int64_t)r * ncol + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
-            memcpy(m + (int64_t)r * ncol + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
+            double *mr = m + (int64_t)r * ncol;
+            memcpy(mr + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
+            for (j = 6 + a6; j < w; j++) mr[j] = 0.0;
+            memcpy(mr + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
+            for (j = w + rA - a6; j < ncol; j++) mr[j] = 0.0;
         }
         ci++;
     }
@@ -1023,9 +1028,11 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         lb = LB + (int64_t)6 * i * ldB;
         m = X + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
-            memcpy(m + (int64_t)r * ncol + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
-            memcpy(m + (int64_t)r * ncol + w + rA - a6, lb + (int64_t)r * ldB + b6,
-                   sizeof(double) * (size_t)(rB - b6));
+            double *mr = m + (int64_t)r * ncol;
+            for (j = 6; j < 6 + a6; j++) mr[j] = 0.0;
+            memcpy(mr + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
+            for (j = w; j < w + rA - a6; j++) mr[j] = 0.0;
+            memcpy(mr + w + rA - a6, lb + (int64_t)r * ldB + b6, sizeof(double) * (size_t)(rB - b6));
         }
         ci++;
     }
