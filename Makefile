@@ -234,6 +234,15 @@ $(HARDREF_SO): tests/reference/hardref_c.cpp tests/reference/hard_reference.hpp 
 check-hard: $(HARDCASES)
 	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick.jsonl
 	$(HARDCASES) --dca-form phi --json $(abspath $(BUILD))/hardcases-quick-phi.jsonl
+# The SSE2 kernels of src/solve/dca.c against their scalar code (docs/testing.md): the
+# library built again with __SSE2__ undefined (build/scalar) must give the same
+# hard-case JSON, byte for byte.
+.PHONY: check-scalar
+check-scalar: $(HARDCASES)
+	$(MAKE) --no-print-directory BUILD=build/scalar CFLAGS_LIB="$(CFLAGS_LIB) -U__SSE2__" build/scalar/tests/reference/hardcases
+	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-sse2.jsonl > /dev/null
+	build/scalar/tests/reference/hardcases --json $(abspath $(BUILD))/hardcases-scalar.jsonl > /dev/null
+	cmp $(abspath $(BUILD))/hardcases-sse2.jsonl $(abspath $(BUILD))/hardcases-scalar.jsonl
 bench-hard: $(HARDCASES)
 	@mkdir -p docs/hardcases
 	$(HARDCASES) --long --json docs/hardcases/long.jsonl | tee docs/hardcases/long.txt
