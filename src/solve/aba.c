@@ -27,6 +27,7 @@
 #include "aba.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "adaptive.h"
@@ -156,6 +157,28 @@ void aba_free(aqs_linkage *L)
  * forward pass then only reads them, which saves writing 216 B per joint
  * back to memory (docs/bench.md, "Time per joint flat in N"). */
 enum { NEED_WORLD = 1, NEED_SET = 2 };
+
+/* Software prefetch of position k's constants and values, ABA_AHEAD
+ * positions ahead of the pass (behind, going backward). The hardware
+ * prefetchers follow the two streams only within a 4 KiB page and late: on
+ * the molecule this takes the pass at 50,000 and 10^6 joints from 1.4-1.7x
+ * the 2,000-joint time per joint to 1.1-1.3x (docs/bench.md, "Time per joint
+ * flat in N"). A hint: no effect on results. */
+#if defined(__GNUC__) || defined(__clang__)
+#define ABA_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+#else
+#define ABA_PREFETCH(p) ((void)(p))
+#endif
+enum { ABA_AHEAD = 4, ABA_LINE = 64 };
+
+ABA_INLINE void prefetch_position(const aba_state *a, int32_t k, int joint_bytes)
+{
+    const char *j = (const char *)&a->joint[k], *n = (const char *)&a->node[k];
+    int l;
+    for (l = 0; l < joint_bytes; l += ABA_LINE) ABA_PREFETCH(j + l);
+    ABA_PREFETCH(j + joint_bytes - 1);
+    for (l = 0; l < (int)sizeof(aba_node); l += ABA_LINE) ABA_PREFETCH(n + l);
+}
 
 /* out = a b, written out (pose_compose). */
 ABA_INLINE void compose(const pose *a, const pose *b, pose *out)
@@ -422,6 +445,7 @@ static aqs_status backward(aqs_linkage *L)
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
+        if (k >= ABA_AHEAD) prefetch_position(a, k - ABA_AHEAD, (int)sizeof(aba_joint));
         double Ia[21], pa[6], *U = nd->v.s.U;
         const unsigned char need = a->need[k];
         if (!(need & NEED_SET)) { /* nothing added into it: a leaf, unloaded */
@@ -550,6 +574,8 @@ static void forward(aqs_linkage *L)
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
+        if (k + ABA_AHEAD < m->ne) /* the forward pass reads the joint's first fields only */
+            prefetch_position(a, k + ABA_AHEAD, (int)offsetof(aba_joint, place));
         double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
         motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
