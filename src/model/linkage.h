@@ -234,9 +234,9 @@ typedef struct {
     double I[21];     /* the composite's spatial inertia, its frame, packed */
 } aba_joint;
 
-/* Rewritten by every solve, same order. IA and pA are started by the
- * backward pass (at I and 0 by the first child that adds into them, or at
- * the position's own turn when none does; src/solve/aba.c, need[]). */
+/* Rewritten by every solve, same order. IA and pA are left at I and 0 by
+ * the forward pass for the next solve's backward pass (children add into
+ * their parent before the parent's turn). */
 typedef struct {
     pose X;           /* the composite's frame in its parent's at the current q */
     double IA[21];    /* articulated inertia of the subtree, its frame, packed */
@@ -259,10 +259,9 @@ typedef struct {
     double *um;       /* multi-dof joints' u, at moff[k]; NULL without */
     int32_t *moff;    /* ne: ABA position k's offset in um (multi-dof joints; NULL without) */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
-    unsigned char *need; /* ne: during a solve, the position's world pose was computed for the
-                            loads; its IA / pA were started (bits, src/solve/aba.c) */
+    unsigned char *need; /* ne: the position's world pose was computed for the loads */
     int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */
-    int dirty;        /* a failed solve left marks in need[]: clear them first */
+    int dirty;        /* a failed solve left IA / pA accumulated: reset them first */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
     int x_valid;      /* inside aba_solve after its pose sweep: world poses by walking up
                          (kin_comp_world_walk) rather than refreshing stale tree poses */

@@ -130,7 +130,7 @@ aqs_status aba_alloc(aqs_linkage *L)
         a->um = lk_calloc_in(L, LK_MEM_EXACT, nm + 1, sizeof(double));
         if (!a->Um || !a->um) return AQS_ENOMEM;
     }
-    a->dirty = 1; /* need[] cleared by the first solve */
+    a->dirty = 1; /* IA and pA set by the first solve */
     return AQS_OK;
 }
 
@@ -149,21 +149,13 @@ void aba_free(aqs_linkage *L)
     memset(a, 0, sizeof *a);
 }
 
-/* need[k]: NEED_WORLD, position k's X and world pose were composed for the
- * loads (world_for_loads); NEED_SET, its IA and pA hold their start values
- * (I and 0, or minus its load) and what was added to them in this backward
- * pass. Both cleared at k's turn. IA and pA are started there (a leaf) or by
- * the first child to add into them, not reset after the forward pass: the
- * forward pass then only reads them, which saves writing 216 B per joint
- * back to memory (docs/bench.md, "Time per joint flat in N"). */
-enum { NEED_WORLD = 1, NEED_SET = 2 };
-
 /* Software prefetch of position k's constants and values, ABA_AHEAD
- * positions ahead of the pass (behind, going backward). The hardware
- * prefetchers follow the two streams only within a 4 KiB page and late: on
- * the molecule this takes the pass at 50,000 and 10^6 joints from 1.4-1.7x
- * the 2,000-joint time per joint to 1.1-1.3x (docs/bench.md, "Time per joint
- * flat in N"). A hint: no effect on results. */
+ * positions ahead of the pass (behind it, going backward): every line of the
+ * values, and of the constants those the pass reads (the backward pass all
+ * but I; the forward pass resets IA from I). The
+ * hardware prefetchers alone leave the passes at 50,000 and 10^6 joints
+ * waiting on memory (docs/bench.md, "Time per joint flat in N"). A hint: no
+ * effect on the results. */
 #if defined(__GNUC__) || defined(__clang__)
 #define ABA_PREFETCH(p) __builtin_prefetch((p), 0, 3)
 #else
@@ -178,6 +170,7 @@ ABA_INLINE void prefetch_position(const aba_state *a, int32_t k, int joint_bytes
     for (l = 0; l < joint_bytes; l += ABA_LINE) ABA_PREFETCH(j + l);
     ABA_PREFETCH(j + joint_bytes - 1);
     for (l = 0; l < (int)sizeof(aba_node); l += ABA_LINE) ABA_PREFETCH(n + l);
+    ABA_PREFETCH(n + sizeof(aba_node) - 1);
 }
 
 /* out = a b, written out (pose_compose). */
@@ -206,8 +199,8 @@ static void world_for_loads(aqs_linkage *L)
     for (i = 0; i < L->nloaded; i++) {
         int32_t c = m->comp_of_body[L->loaded_bodies[i]], k, start = n, j;
         if (c == m->ncomp) continue;
-        for (k = a->pos_of_comp[c]; k >= 0 && !(a->need[k] & NEED_WORLD); k = a->joint[k].parent) {
-            a->need[k] |= NEED_WORLD;
+        for (k = a->pos_of_comp[c]; k >= 0 && !a->need[k]; k = a->joint[k].parent) {
+            a->need[k] = 1;
             a->path[n++] = k;
         }
         for (j = n - 1; j >= start; j--) { /* parents first */
@@ -220,11 +213,18 @@ static void world_for_loads(aqs_linkage *L)
     }
 }
 
-/* No marks (after a failed solve, and before the first). */
+/* IA <- I, pA <- 0 and no marks everywhere (after a failed solve, and
+ * before the first). */
 static void reset_nodes(aqs_linkage *L)
 {
-    memset(L->aba.need, 0, (size_t)L->m.ne);
-    L->aba.dirty = 0;
+    aba_state *a = &L->aba;
+    int32_t k;
+    memset(a->need, 0, (size_t)L->m.ne);
+    for (k = 0; k < L->m.ne; k++) {
+        memcpy(a->node[k].IA, a->joint[k].I, sizeof a->node[k].IA);
+        memset(a->node[k].pA, 0, sizeof a->node[k].pA);
+    }
+    a->dirty = 0;
 }
 
 /* out += R S R^T for packed symmetric 3x3 S (xx xy xz yy yz zz), R row-major. */
@@ -266,12 +266,11 @@ ABA_INLINE void cross(const double *a, double b0, double b1, double b2, double *
     o[2] = a[0] * b1 - a[1] * b0;
 }
 
-/* IG = I0 + X* IF X*^T for the frame with pose P in G, packed (I0 == IG:
- * IG += ...; element by element, so they may alias); the same arithmetic as
- * spatial_inertia_to_parent: rotate the blocks (A' = R A R^T, B' = R B R^T,
- * C' = R C R^T), then with M = p~ C' and K = p~ B'^T:
+/* IG += X* IF X*^T for the frame with pose P in G, packed; the same
+ * arithmetic as spatial_inertia_to_parent: rotate the blocks (A' = R A R^T,
+ * B' = R B R^T, C' = R C R^T), then with M = p~ C' and K = p~ B'^T:
  * A'' = A' + K + K^T - M p~,  B'' = B' + M,  C'' = C'. */
-static void inertia_to_parent_add(const pose *P, const double *IF, const double *I0, double *IG)
+static void inertia_to_parent_add(const pose *P, const double *IF, double *IG)
 {
     const double *p = P->p;
     double A[6], B[9], C[6], Cf[9], M[9], K[9], N[9];
@@ -290,41 +289,29 @@ static void inertia_to_parent_add(const pose *P, const double *IF, const double 
     }
     for (i = 0; i < 3; i++) /* row i of M p~ = -(p x row i of M) */
         cross(p, M[3 * i], M[3 * i + 1], M[3 * i + 2], N + 3 * i);
-    IG[KIN_PA + 0] = I0[KIN_PA + 0] + (A[0] + 2.0 * K[0] + N[0]);
-    IG[KIN_PA + 1] = I0[KIN_PA + 1] + (A[1] + K[1] + K[3] + N[1]);
-    IG[KIN_PA + 2] = I0[KIN_PA + 2] + (A[2] + K[2] + K[6] + N[2]);
-    IG[KIN_PA + 3] = I0[KIN_PA + 3] + (A[3] + 2.0 * K[4] + N[4]);
-    IG[KIN_PA + 4] = I0[KIN_PA + 4] + (A[4] + K[5] + K[7] + N[5]);
-    IG[KIN_PA + 5] = I0[KIN_PA + 5] + (A[5] + 2.0 * K[8] + N[8]);
-    for (i = 0; i < 9; i++) IG[KIN_PB + i] = I0[KIN_PB + i] + (B[i] + M[i]);
-    for (i = 0; i < 6; i++) IG[KIN_PC + i] = I0[KIN_PC + i] + C[i];
+    IG[KIN_PA + 0] += A[0] + 2.0 * K[0] + N[0];
+    IG[KIN_PA + 1] += A[1] + K[1] + K[3] + N[1];
+    IG[KIN_PA + 2] += A[2] + K[2] + K[6] + N[2];
+    IG[KIN_PA + 3] += A[3] + 2.0 * K[4] + N[4];
+    IG[KIN_PA + 4] += A[4] + K[5] + K[7] + N[5];
+    IG[KIN_PA + 5] += A[5] + 2.0 * K[8] + N[8];
+    for (i = 0; i < 9; i++) IG[KIN_PB + i] += B[i] + M[i];
+    for (i = 0; i < 6; i++) IG[KIN_PC + i] += C[i];
 }
 
-/* g = g0 + X^T f: [R n + p x (R f); R f] (g0 == g: g += ...; g0 NULL: 0). */
-ABA_INLINE void force_to_parent_add(const pose *P, const double *f, const double *g0, double *g)
+/* pG += X^T f: [R n + p x (R f); R f]. */
+ABA_INLINE void force_to_parent_add(const pose *P, const double *f, double *g)
 {
     const double *R = P->R, *p = P->p;
     double l0 = R[0] * f[3] + R[1] * f[4] + R[2] * f[5];
     double l1 = R[3] * f[3] + R[4] * f[4] + R[5] * f[5];
     double l2 = R[6] * f[3] + R[7] * f[4] + R[8] * f[5];
-    const double h0 = R[0] * f[0] + R[1] * f[1] + R[2] * f[2] + (p[1] * l2 - p[2] * l1);
-    const double h1 = R[3] * f[0] + R[4] * f[1] + R[5] * f[2] + (p[2] * l0 - p[0] * l2);
-    const double h2 = R[6] * f[0] + R[7] * f[1] + R[8] * f[2] + (p[0] * l1 - p[1] * l0);
-    if (g0) {
-        g[0] = g0[0] + h0;
-        g[1] = g0[1] + h1;
-        g[2] = g0[2] + h2;
-        g[3] = g0[3] + l0;
-        g[4] = g0[4] + l1;
-        g[5] = g0[5] + l2;
-    } else { /* 0 + h, as the accumulation into a zeroed pA computed it */
-        g[0] = 0.0 + h0;
-        g[1] = 0.0 + h1;
-        g[2] = 0.0 + h2;
-        g[3] = 0.0 + l0;
-        g[4] = 0.0 + l1;
-        g[5] = 0.0 + l2;
-    }
+    g[0] += R[0] * f[0] + R[1] * f[1] + R[2] * f[2] + (p[1] * l2 - p[2] * l1);
+    g[1] += R[3] * f[0] + R[4] * f[1] + R[5] * f[2] + (p[2] * l0 - p[0] * l2);
+    g[2] += R[6] * f[0] + R[7] * f[1] + R[8] * f[2] + (p[0] * l1 - p[1] * l0);
+    g[3] += l0;
+    g[4] += l1;
+    g[5] += l2;
 }
 
 /* o = X v, v in the parent's frame: [R^T w; R^T (v - p x w)]. */
@@ -432,29 +419,18 @@ static aqs_status backward(aqs_linkage *L)
     int32_t k, i;
     aqs_status st;
     for (i = 0; i < m->nloaded_comps; i++) { /* pA starts at minus the loads */
-        int32_t c = m->loaded_comps[i], n = a->pos_of_comp[c];
-        aba_node *nd = &a->node[n];
-        if (!(a->need[n] & NEED_SET)) {
-            memcpy(nd->IA, a->joint[n].I, sizeof nd->IA);
-            memset(nd->pA, 0, sizeof nd->pA);
-            a->need[n] |= NEED_SET;
-        }
-        for (k = 0; k < 6; k++) nd->pA[k] -= m->comp_force[6 * c + k];
+        int32_t c = m->loaded_comps[i];
+        double *pA = a->node[a->pos_of_comp[c]].pA;
+        for (k = 0; k < 6; k++) pA[k] -= m->comp_force[6 * c + k];
     }
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
-        if (k >= ABA_AHEAD) prefetch_position(a, k - ABA_AHEAD, (int)sizeof(aba_joint));
+        if (k >= ABA_AHEAD) prefetch_position(a, k - ABA_AHEAD, (int)offsetof(aba_joint, I));
         double Ia[21], pa[6], *U = nd->v.s.U;
-        const unsigned char need = a->need[k];
-        if (!(need & NEED_SET)) { /* nothing added into it: a leaf, unloaded */
-            memcpy(nd->IA, jt->I, sizeof nd->IA);
-            memset(nd->pA, 0, sizeof nd->pA);
-        }
-        if (need) a->need[k] = 0;
-        if (!(need & NEED_WORLD)) kin_joint_pose(L, jt, &nd->X); /* else composed for the loads already;
-                                                                  composed once: the forward pass reads it */
+        if (a->need[k]) a->need[k] = 0; /* X composed for the loads already */
+        else kin_joint_pose(L, jt, &nd->X); /* composed once: the forward pass reads it */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             double D, Dinv, u, w;
             if (jt->type == AQS_JOINT_REVOLUTE) { /* S = [axis; 0]: U = [A x; B^T x] */
@@ -516,18 +492,9 @@ static aqs_status backward(aqs_linkage *L)
             if (jt->parent < 0) continue;
         }
         {
-            /* the first child to add (the last in the order) starts the
-             * parent's sums at its I and 0: the values the parent would
-             * have held, summed in the same order */
             aba_node *pn = &a->node[jt->parent];
-            if (a->need[jt->parent] & NEED_SET) {
-                inertia_to_parent_add(&nd->X, Ia, pn->IA, pn->IA);
-                force_to_parent_add(&nd->X, pa, pn->pA, pn->pA);
-            } else {
-                a->need[jt->parent] |= NEED_SET;
-                inertia_to_parent_add(&nd->X, Ia, a->joint[jt->parent].I, pn->IA);
-                force_to_parent_add(&nd->X, pa, NULL, pn->pA);
-            }
+            inertia_to_parent_add(&nd->X, Ia, pn->IA);
+            force_to_parent_add(&nd->X, pa, pn->pA);
         }
     }
     return AQS_OK;
@@ -574,8 +541,7 @@ static void forward(aqs_linkage *L)
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
-        if (k + ABA_AHEAD < m->ne) /* the forward pass reads the joint's first fields only */
-            prefetch_position(a, k + ABA_AHEAD, (int)offsetof(aba_joint, place));
+        if (k + ABA_AHEAD < m->ne) prefetch_position(a, k + ABA_AHEAD, (int)sizeof(aba_joint));
         double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
         motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
@@ -592,6 +558,8 @@ static void forward(aqs_linkage *L)
         }
         inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
+        memset(nd->pA, 0, sizeof nd->pA);
     }
 }
 
@@ -643,7 +611,7 @@ aqs_status aba_solve(aqs_linkage *L)
     update_loads(L); /* the composites' loads in their frames */
     L->aba.world_valid = 0;
     if ((st = backward(L)) != AQS_OK) {
-        L->aba.dirty = 1; /* marks left in need[] */
+        L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
         return st;
     }
     forward(L);
