@@ -167,10 +167,10 @@ ABA_INLINE void prefetch_position(const aba_state *a, int32_t k, int joint_bytes
 {
     const char *j = (const char *)&a->joint[k], *n = (const char *)&a->node[k];
     int l;
+    /* a line from each 64 bytes: the line holding a struct's last bytes is
+     * the next one's first, prefetched with it */
     for (l = 0; l < joint_bytes; l += ABA_LINE) ABA_PREFETCH(j + l);
-    ABA_PREFETCH(j + joint_bytes - 1);
     for (l = 0; l < (int)sizeof(aba_node); l += ABA_LINE) ABA_PREFETCH(n + l);
-    ABA_PREFETCH(n + sizeof(aba_node) - 1);
 }
 
 /* out = a b, written out (pose_compose). */
