@@ -152,10 +152,10 @@ void aba_free(aqs_linkage *L)
 /* Software prefetch of position k's constants and values, ABA_AHEAD
  * positions ahead of the pass (behind it, going backward): every line of the
  * values, and of the constants those the pass reads (the backward pass all
- * but I; the forward pass resets IA from I). The
- * hardware prefetchers alone leave the passes at 50,000 and 10^6 joints
- * waiting on memory (docs/bench.md, "Time per joint flat in N"). A hint: no
- * effect on the results. */
+ * but I; the forward pass resets IA from I). With the hardware prefetchers
+ * alone the passes at 50,000 and 10^6 joints took 1.2-1.3x as long
+ * (docs/bench.md, "Time per joint flat in N"). A hint: no effect on the
+ * results. */
 #if defined(__GNUC__) || defined(__clang__)
 #define ABA_PREFETCH(p) __builtin_prefetch((p), 0, 3)
 #else
@@ -437,8 +437,8 @@ static aqs_status backward(aqs_linkage *L)
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
-        if (k >= ahead) prefetch_position(a, k - ABA_AHEAD, (int)offsetof(aba_joint, I));
         double Ia[21], pa[6], *U = nd->v.s.U;
+        if (k >= ahead) prefetch_position(a, k - ABA_AHEAD, (int)offsetof(aba_joint, I));
         if (a->need[k]) a->need[k] = 0; /* X composed for the loads already */
         else kin_joint_pose(L, jt, &nd->X); /* composed once: the forward pass reads it */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
@@ -552,8 +552,8 @@ static void forward(aqs_linkage *L)
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
-        if (k + ahead < m->ne) prefetch_position(a, k + ABA_AHEAD, (int)sizeof(aba_joint));
         double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
+        if (k + ahead < m->ne) prefetch_position(a, k + ABA_AHEAD, (int)sizeof(aba_joint));
         motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             const double *U = nd->v.s.U, *x = jt->axis;
