@@ -5,7 +5,7 @@
  * process, and the memory each linkage holds (counted by its allocator).
  *
  *   exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K]
- *              [--gravity] [--tolerance] [--memory]
+ *              [--gravity] [--tolerance] [--memory] [--trace]
  *   exact_main --bandwidth MB
  *
  * Each linkage gets one force (1 N at the centre of mass of a seeded body,
@@ -21,6 +21,9 @@
  * aqs_linkage_set_tolerance(..., 0) after. --memory: after the timed rounds,
  * each linkage gets rel_joint 2^-19 and one solve, and its memory per joint is
  * printed exact and with the tolerance, by category (make bench-scaling).
+ *
+ * --trace: every pass's time as it is taken, "trace JOINTS ROUND PASS NS_PER_JOINT"
+ * (to see a size's passes one by one: the first after another size, bimodality).
  *
  * --bandwidth MB: the single-core streaming read bandwidth, the floor of a
  * pass over memory: MB megabytes of doubles summed with 4 accumulators, 7
@@ -173,7 +176,7 @@ static int bandwidth(long mb)
 
 int main(int argc, char **argv)
 {
-    int scene = BENCH_SCENE_MOLECULE, rounds = 5, reps = 5, gravity = 0, tolerance = 0, mem_report = 0;
+    int scene = BENCH_SCENE_MOLECULE, rounds = 5, reps = 5, gravity = 0, tolerance = 0, mem_report = 0, trace = 0;
     int nsizes = 0, a, r, s, k;
     int32_t sizes[MAX_SIZES];
     item items[MAX_SIZES];
@@ -200,8 +203,10 @@ int main(int argc, char **argv)
             tolerance = 1;
         } else if (!strcmp(argv[a], "--memory")) {
             mem_report = 1;
+        } else if (!strcmp(argv[a], "--trace")) {
+            trace = 1;
         } else {
-            fprintf(stderr, "usage: exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K] [--gravity] [--tolerance] [--memory]\n");
+            fprintf(stderr, "usage: exact_main [--scene NAME] [--sizes LIST] [--rounds R] [--reps K] [--gravity] [--tolerance] [--memory] [--trace]\n");
             return 2;
         }
     }
@@ -223,6 +228,7 @@ int main(int argc, char **argv)
                 t0 = bench_now();
                 if (bench_exact_pass(it->L, it->q, (size_t)it->nq)) return fail(it->L, "pass");
                 tmp[k] = 1e9 * (bench_now() - t0);
+                if (trace) printf("trace %d %d %d %.1f\n", (int)it->joints, r, k, tmp[k] / it->joints);
             }
             it->round_ns[r] = bench_median(tmp, (size_t)reps);
         }
