@@ -18,6 +18,7 @@
 #include "frames.h"
 #include "linkage.h"
 #include "model.h"
+#include "refine.h"
 #include "stale.h"
 #include "totalacc.h"
 #include "worldbound.h"
@@ -145,6 +146,7 @@ static void free_solver(aqs_linkage *L)
     aba_free(L);
     adaptive_free(L);
     worldbound_free(L);
+    refine_free(L);
     totalacc_free(L);
     assembly_free(L);
     model_free(L);
@@ -777,6 +779,12 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
         }
         adaptive_solve(L);
         path = L->s.eps == 0.0 && L->s.max_computed == 0 ? AQS_PATH_EXACT_DCA : AQS_PATH_ADAPTIVE;
+        /* every joint through the DCA's back-substitution: refined to the
+         * articulated-body solve's accuracy (docs/math.md §13a) */
+        if (path == AQS_PATH_EXACT_DCA && (st = refine_exact(L)) != AQS_OK) {
+            stale_solve_failed(L);
+            return st;
+        }
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         stale_solve_failed(L);
