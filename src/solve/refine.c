@@ -24,10 +24,10 @@
 #include "dca.h"
 #include "residual.h"
 
-/* Corrections tried at most, and the residual level (units of u times the
- * terms' magnitudes) below which none is tried. */
+/* Corrections tried at most, and the componentwise backward error (units of
+ * u) at or below which none is tried. */
 #define REFINE_SWEEPS 3
-#define REFINE_LEVEL 4.0
+#define REFINE_LEVEL 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -136,32 +136,42 @@ static int correction(aqs_linkage *L, double *r)
     return 0;
 }
 
-aqs_status refine_exact(aqs_linkage *L)
+/* No further correction is worth a node pass: the last one was at most
+ * REFINE_LEVEL u ||q1|| (max norms). Each correction multiplies the error by
+ * about the DCA's relative error level on that load, so the next one would be
+ * that much smaller again: at the rounding level, where the random trees'
+ * first correction (4e2 .. 7e2 u) already leaves them. */
+static int resolved(const double *dq, const double *q1, int32_t nv)
 {
     const double u = 1.1102230246251565e-16;
+    double qmax = 0.0, dmax = 0.0;
+    int32_t i;
+    for (i = 0; i < nv; i++) {
+        qmax = fmax(qmax, fabs(q1[i]));
+        dmax = fmax(dmax, fabs(dq[i]));
+    }
+    return dmax <= REFINE_LEVEL * u * qmax;
+}
+
+aqs_status refine_exact(aqs_linkage *L)
+{
     struct refine *R;
-    double rn, scale, *tmp;
-    int32_t sweep, i, nv = L->nv, saved = 0, kept = 0, current = 1;
+    double rn, *tmp;
+    int32_t sweep, i, nv = L->nv, kept = 0, current = 1;
     aqs_status st;
     L->s.refined = 0;
     if (L->t.nnodes == 0 || L->m.ne == 0) return AQS_OK;
     if ((st = refine_alloc(L)) != AQS_OK) return st;
     R = L->rf;
     residual_poses(L);
-    rn = residual_eval(L, L->qdd, R->r, &scale);
-    for (sweep = 0; sweep < REFINE_SWEEPS && isfinite(rn) && rn > REFINE_LEVEL * u * scale; sweep++) {
-        double rn1, scale1, dn = 0.0, qn = 0.0;
-        if (!saved) {
-            save_loads(L, 0);
-            saved = 1;
-        }
+    rn = residual_eval(L, L->qdd, R->r);
+    if (!isfinite(rn) || rn == 0.0) return AQS_OK;
+    save_loads(L, 0);
+    for (sweep = 0; sweep < REFINE_SWEEPS; sweep++) {
+        double rn1;
         if (correction(L, R->r) != 0) break;
-        for (i = 0; i < nv; i++) {
-            R->q1[i] = L->qdd[i] + R->dq[i];
-            dn += R->dq[i] * R->dq[i];
-            qn += L->qdd[i] * L->qdd[i];
-        }
-        rn1 = residual_eval(L, R->q1, R->r2, &scale1);
+        for (i = 0; i < nv; i++) R->q1[i] = L->qdd[i] + R->dq[i];
+        rn1 = residual_eval(L, R->q1, R->r2);
         current = 0;
         /* kept only when finite (the residual of a non-finite candidate is
          * not) and the residual went down */
@@ -169,16 +179,15 @@ aqs_status refine_exact(aqs_linkage *L)
         memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
-        scale = scale1;
         current = 1;
         kept++;
-        if (!(dn > u * u * qn)) break; /* below what the residual resolves */
+        if (rn == 0.0 || resolved(R->dq, R->q1, nv)) break;
     }
-    if (saved) save_loads(L, 1);
+    save_loads(L, 1);
     if (kept) {
         /* the joint forces of the refined accelerations: the last residual's
          * when it was the kept one */
-        if (!current) (void)residual_eval(L, L->qdd, R->r2, &scale);
+        if (!current) (void)residual_eval(L, L->qdd, R->r2);
         residual_forces(L, L->cforce);
         if (L->m.nwelded > 0) aba_welded_forces(L);
     }

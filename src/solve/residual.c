@@ -10,9 +10,10 @@
  * f_c is then the force of joint e on c, L->cforce's convention. Every body's
  * inertia enters once and every load once: the residual of the
  * articulated-body solve's own answer is at the rounding level (tests/
- * test_refine.c). Scratch: the articulated-body solver's per-solve node
- * values (X, and v.s for a_c and f_c), which every solve that reads them
- * rewrites first. */
+ * test_refine.c). In working precision: a residual in double-double was
+ * measured to buy nothing refinement could use, at 7x the cost (docs/math.md
+ * §13a). Scratch: the articulated-body solver's per-solve node values (X, and
+ * v.s for a_c and f_c), which every solve that reads them rewrites first. */
 #include "residual.h"
 
 #include <math.h>
@@ -27,11 +28,11 @@ void residual_poses(aqs_linkage *L)
     for (k = 0; k < L->m.ne; k++) kin_joint_pose(L, &a->joint[k], &a->node[k].X);
 }
 
-double residual_eval(aqs_linkage *L, const double *qdd, double *r, double *scale)
+double residual_eval(aqs_linkage *L, const double *qdd, double *r)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double g[6], sq = 0.0, ss = 0.0, S[36];
+    double g[6], sq = 0.0, S[36];
     int32_t k, i, j;
     for (i = 0; i < 3; i++) {
         g[i] = 0.0;
@@ -72,7 +73,6 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r, double *scale
             const double s = x[0] * fo[0] + x[1] * fo[1] + x[2] * fo[2];
             rk[0] = Q[0] - s;
             sq += rk[0] * rk[0];
-            ss += (fabs(Q[0]) + fabs(s)) * (fabs(Q[0]) + fabs(s));
         } else {
             const int d = joint_nv(jt->type);
             joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
@@ -81,7 +81,6 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r, double *scale
                 for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
                 rk[j] = Q[j] - s;
                 sq += rk[j] * rk[j];
-                ss += (fabs(Q[j]) + fabs(s)) * (fabs(Q[j]) + fabs(s));
             }
         }
         if (jt->parent >= 0) {
@@ -90,7 +89,6 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r, double *scale
             for (i = 0; i < 6; i++) fp[i] += t[i];
         }
     }
-    *scale = sqrt(ss);
     return sqrt(sq);
 }
 

@@ -9,16 +9,15 @@
 #include "linkage.h"
 
 /* Each composite's frame in its parent's at the current positions, into
- * the articulated-body solver's per-solve node values (node[k].X): once
- * before residual_eval calls at the same positions. */
+ * the articulated-body solver's per-solve node values (node[k].X, which
+ * every articulated-body solve rewrites first): once before residual_eval
+ * calls at the same positions. */
 void residual_poses(aqs_linkage *L);
 /* r (nv) = L->tau - ID(qdd) with the current gravity and the composites'
  * loads (L->m.comp_force, current after update_loads). Returns ||r||_2 (NaN
- * or inf when a value is not finite) and in *scale the 2-norm of the terms'
- * magnitudes |Q| + |S^T f| per dof (the level the residual's own rounding is
- * measured against). The joint forces f it formed stay in the node values
- * until residual_forces or the next solve. */
-double residual_eval(aqs_linkage *L, const double *qdd, double *r, double *scale);
+ * or inf when a value is not finite). The joint forces f it formed stay in
+ * the node values (v.s.U) until residual_forces or the next solve. */
+double residual_eval(aqs_linkage *L, const double *qdd, double *r);
 /* The joint forces of the last residual_eval into cforce (6 per user joint,
  * L->cforce's convention: the force of the joint on its child composite, in
  * the composite's frame); fixed joints' entries are not written. */
