@@ -11,7 +11,8 @@
  *   - the refinement leaves the DCA's stored values as they were: an
  *     adaptive solve after a refined exact one is bit for bit the one of a
  *     twin linkage that never refined;
- *   - a linkage at rest (zero residual) is not refined.
+ *   - a linkage at rest (zero residual) is not refined; the setting turns it
+ *     off and refuses values out of range.
  * The reference is the articulated-body solve: an independent algorithm,
  * within 1e-15 of a __float128 reference on these families
  * (tests/reference/hardcases.cpp: altmass r = 1e6, ABA 5e-16 .. 1e-15). */
@@ -197,6 +198,40 @@ static void test_state_restored(void **state)
     aqs_linkage_destroy(B);
 }
 
+/* aqs_linkage_set_exact_refinement: 0 turns it off (the unrefined answer,
+ * bit for bit the back-substitution an adaptive solve computing every joint
+ * gives), values outside 0 .. 3 are refused and change nothing. */
+static void test_setting(void **state)
+{
+    aqs_linkage *L = altmass(40, 1e6, 0, 5);
+    double q0[40], qc[40];
+    int32_t m = -1;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_exact_refinement(L, &m), AQS_OK);
+    assert_int_equal(m, AQS_EXACT_REFINEMENT_MAX);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, -1), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, AQS_EXACT_REFINEMENT_MAX + 1), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_get_exact_refinement(L, &m), AQS_OK);
+    assert_int_equal(m, AQS_EXACT_REFINEMENT_MAX);
+    assert_int_equal(aqs_linkage_get_exact_refinement(L, NULL), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(L->s.refined, 0);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q0, 40), AQS_OK);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 41), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qc, 40), AQS_OK);
+    assert_memory_equal(q0, qc, sizeof q0);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_true(L->s.refined == 1);
+    assert_int_equal(aqs_linkage_set_exact_refinement(NULL, 1), AQS_EINVAL);
+    aqs_linkage_destroy(L);
+}
+
 /* At rest (no gravity, no load): residual zero, nothing refined, qdd = 0. */
 static void test_rest(void **state)
 {
@@ -221,6 +256,7 @@ int main(void)
         cmocka_unit_test(test_residual_of_aba),
         cmocka_unit_test(test_altmass),
         cmocka_unit_test(test_state_restored),
+        cmocka_unit_test(test_setting),
         cmocka_unit_test(test_rest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

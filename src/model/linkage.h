@@ -338,6 +338,7 @@ struct aqs_linkage {
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
+    int32_t refine_max;   /* corrections of an exact DCA solve (aqs_linkage_set_exact_refinement) */
     int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */

@@ -24,10 +24,10 @@
 #include "dca.h"
 #include "residual.h"
 
-/* Corrections tried at most, and the componentwise backward error (units of
- * u) at or below which none is tried. */
-#define REFINE_SWEEPS 3
-#define REFINE_LEVEL 16.0
+/* The size of a correction (units of u, relative) after which no further one
+ * is tried (resolved below); at most L->refine_max corrections
+ * (aqs_linkage_set_exact_refinement). */
+#define REFINE_LEVEL 1024.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -160,14 +160,14 @@ aqs_status refine_exact(aqs_linkage *L)
     int32_t sweep, i, nv = L->nv, kept = 0, current = 1;
     aqs_status st;
     L->s.refined = 0;
-    if (L->t.nnodes == 0 || L->m.ne == 0) return AQS_OK;
+    if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return AQS_OK;
     if ((st = refine_alloc(L)) != AQS_OK) return st;
     R = L->rf;
     residual_poses(L);
     rn = residual_eval(L, L->qdd, R->r);
     if (!isfinite(rn) || rn == 0.0) return AQS_OK;
     save_loads(L, 0);
-    for (sweep = 0; sweep < REFINE_SWEEPS; sweep++) {
+    for (sweep = 0; sweep < L->refine_max; sweep++) {
         double rn1;
         if (correction(L, R->r) != 0) break;
         for (i = 0; i < nv; i++) R->q1[i] = L->qdd[i] + R->dq[i];

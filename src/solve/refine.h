@@ -7,7 +7,7 @@
 #include "linkage.h"
 
 /* After an exact DCA solve (adaptive_solve with eps = 0 and no cap, the
- * coefficients current): up to REFINE_SWEEPS corrections of L->qdd, each
+ * coefficients current): up to L->refine_max corrections of L->qdd, each
  * kept only when it is finite and lowers the residual's 2-norm; L->cforce
  * then holds the inverse dynamics' forces of the refined accelerations
  * (fixed joints' included). The DCA's stored load-dependent values (b, rho,

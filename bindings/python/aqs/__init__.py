@@ -991,6 +991,20 @@ class Linkage:
         self._call("aqs_linkage_get_exact_solver", ctypes.byref(value))
         return EXACT_SOLVER_NAMES[value.value]
 
+    def set_exact_refinement(self, max_corrections):
+        """At most max_corrections (0 .. 3, default 3; 0: off) corrections
+        of an exact DCA solve by the DCA itself with the inverse-dynamics
+        residual as the load, each kept only when it lowers the residual
+        (aqs_linkage_set_exact_refinement, docs/math.md 13a). Any phase."""
+        self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
+
+    @property
+    def exact_refinement(self):
+        """The maximum corrections of an exact DCA solve (aqs_linkage_get_exact_refinement)."""
+        value = ctypes.c_int32()
+        self._call("aqs_linkage_get_exact_refinement", ctypes.byref(value))
+        return value.value
+
     def refine(self, eps):
         """Refine the last solve down to a smaller eps, same measure, by
         continuing it rather than starting over (aqs_linkage_refine); returns

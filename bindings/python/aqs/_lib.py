@@ -375,6 +375,8 @@ PROTOTYPES = {
     "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_set_exact_solver": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
+    "aqs_linkage_set_exact_refinement": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_get_exact_refinement": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_dca_form": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_dca_form": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),
