@@ -868,10 +868,10 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  and lowers the inverse-dynamics residual; the constraint forces are then
  *  those of the refined accelerations. Each costs about one more pass over
  *  the tree's nodes. max_corrections: 0 (off: the DCA's back-substitution as
- *  it is, the paper's exact solver) to AQS_EXACT_REFINEMENT_MAX; default
- *  AQS_EXACT_REFINEMENT_MAX. Any phase; takes effect at the next solve.
+ *  it is, the paper's exact solver) to AQS_REFINEMENT_MAX; default
+ *  AQS_REFINEMENT_MAX. Any phase; takes effect at the next solve.
  *  Returns AQS_OK, AQS_EINVAL (nothing changed). */
-#define AQS_EXACT_REFINEMENT_MAX 3
+#define AQS_REFINEMENT_MAX 3
 AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *linkage, int32_t max_corrections);
 /** The current maximum into *max_corrections. Returns AQS_OK, AQS_EINVAL (NULL). */
 AQS_API aqs_status aqs_linkage_get_exact_refinement(const aqs_linkage *linkage, int32_t *max_corrections);

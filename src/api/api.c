@@ -132,7 +132,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->mem_blocks = 1;
     L->t.root = -1;
     autopath_init(L);
-    L->refine_max = AQS_EXACT_REFINEMENT_MAX;
+    L->refine_max = AQS_REFINEMENT_MAX;
     *out = L;
     return AQS_OK;
 }
@@ -225,9 +225,9 @@ AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *L, int32_t max_
 {
     static const char fn[] = "aqs_linkage_set_exact_refinement";
     CHECK_LINKAGE(L);
-    if (max_corrections < 0 || max_corrections > AQS_EXACT_REFINEMENT_MAX)
+    if (max_corrections < 0 || max_corrections > AQS_REFINEMENT_MAX)
         return lk_fail(L, AQS_EINVAL, "%s: max_corrections = %d is not in 0 .. %d", fn, (int)max_corrections,
-                       AQS_EXACT_REFINEMENT_MAX);
+                       AQS_REFINEMENT_MAX);
     L->refine_max = max_corrections;
     return AQS_OK;
 }
