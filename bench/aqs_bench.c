@@ -969,8 +969,12 @@ static int setup(bench_state *b)
     double t0;
     int32_t i, max_forces = 0;
     rss0 = bench_current_rss_bytes();
+    /* the DCA step is R's reference for the adaptive step's nodes: the
+     * back-substitution as it is, without the exact solve's refinement
+     * (docs/math.md 13a), as the adaptive solve processes them */
     if (failed(aqs_linkage_create(&b->exact), NULL, "aqs_linkage_create") ||
-        failed(aqs_linkage_set_dca_form(b->exact, o->dca_form), b->exact, "aqs_linkage_set_dca_form")) {
+        failed(aqs_linkage_set_dca_form(b->exact, o->dca_form), b->exact, "aqs_linkage_set_dca_form") ||
+        failed(aqs_linkage_set_exact_refinement(b->exact, 0), b->exact, "aqs_linkage_set_exact_refinement")) {
         return 1;
     }
     t0 = bench_now();

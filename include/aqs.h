@@ -861,6 +861,21 @@ AQS_API aqs_status aqs_linkage_get_query_stats(const aqs_linkage *linkage, aqs_c
  *  kind. Returns AQS_OK, AQS_EINVAL, AQS_ESTATE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, double stiffness);
 
+/** Iterative refinement of the exact DCA solve (docs/math.md 13a): after a
+ *  solve that computes every joint through the DCA's back-substitution
+ *  (AQS_EXACT_DCA, or eps = 0 without a cap), at most max_corrections
+ *  corrections qdd += DCA^-1(Q - ID(qdd)), each kept only when it is finite
+ *  and lowers the inverse-dynamics residual; the constraint forces are then
+ *  those of the refined accelerations. Each costs about one more pass over
+ *  the tree's nodes. max_corrections: 0 (off: the DCA's back-substitution as
+ *  it is, the paper's exact solver) to AQS_REFINEMENT_MAX; default
+ *  AQS_REFINEMENT_MAX. Any phase; takes effect at the next solve.
+ *  Returns AQS_OK, AQS_EINVAL (nothing changed). */
+#define AQS_REFINEMENT_MAX 3
+AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *linkage, int32_t max_corrections);
+/** The current maximum into *max_corrections. Returns AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_exact_refinement(const aqs_linkage *linkage, int32_t *max_corrections);
+
 #ifdef __cplusplus
 }
 #endif

@@ -118,8 +118,13 @@ static void check_bounds(aqs_linkage *L, tally *t, double abs_floor)
     assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
     exact = malloc(sizeof(double) * (size_t)(nv + 1));
     approx = malloc(sizeof(double) * (size_t)(nv + 1));
+    /* the reference: every joint back-substituted from the same coefficients
+     * without the exact solve's refinement (docs/math.md §13a), as the
+     * adaptive solves compute them: eps = 0 with a cap of every joint */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_max_computed(L, L->njoints + 1), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(L, exact, (size_t)nv), AQS_OK);
     exact_norms(L, exact, &norm2, &maxj);
     for (metric = 0; metric < 4; metric++)
@@ -1023,6 +1028,8 @@ static void test_prediction(void **state)
          * computes every joint the difference is rounding of the same code
          * (the articulated-body solver differs by ~1e-13 relative) */
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
+        /* unrefined (docs/math.md §13a): every joint through the adaptive path */
+        assert_int_equal(aqs_linkage_set_max_computed(X, X->njoints + 1), AQS_OK);
         assert_int_equal(aqs_linkage_get_prediction(L, &m), AQS_OK);
         assert_true(m == AQS_PREDICTION_MARGIN);
         assert_int_equal(aqs_linkage_set_prediction(O, 0.0), AQS_OK);
@@ -1134,6 +1141,8 @@ static void test_prediction_refine(void **state)
         rng = r0;
         X = test_random_tree(&rng, &sp);
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
+        /* unrefined (docs/math.md §13a): every joint through the adaptive path */
+        assert_int_equal(aqs_linkage_set_max_computed(X, X->njoints + 1), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive solves and refines */
         nv = L->nv;
         exact = malloc(sizeof(double) * (size_t)(nv + 1));

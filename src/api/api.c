@@ -18,6 +18,7 @@
 #include "frames.h"
 #include "linkage.h"
 #include "model.h"
+#include "refine.h"
 #include "stale.h"
 #include "totalacc.h"
 #include "worldbound.h"
@@ -131,6 +132,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->mem_blocks = 1;
     L->t.root = -1;
     autopath_init(L);
+    L->refine_max = AQS_REFINEMENT_MAX;
     *out = L;
     return AQS_OK;
 }
@@ -145,6 +147,7 @@ static void free_solver(aqs_linkage *L)
     aba_free(L);
     adaptive_free(L);
     worldbound_free(L);
+    refine_free(L);
     totalacc_free(L);
     assembly_free(L);
     model_free(L);
@@ -215,6 +218,27 @@ AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *L, int32_t *s
     CHECK_LINKAGE(ml);
     CHECK_PTR(ml, fn, solver);
     *solver = L->exact_solver;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *L, int32_t max_corrections)
+{
+    static const char fn[] = "aqs_linkage_set_exact_refinement";
+    CHECK_LINKAGE(L);
+    if (max_corrections < 0 || max_corrections > AQS_REFINEMENT_MAX)
+        return lk_fail(L, AQS_EINVAL, "%s: max_corrections = %d is not in 0 .. %d", fn, (int)max_corrections,
+                       AQS_REFINEMENT_MAX);
+    L->refine_max = max_corrections;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_exact_refinement(const aqs_linkage *L, int32_t *max_corrections)
+{
+    static const char fn[] = "aqs_linkage_get_exact_refinement";
+    aqs_linkage *ml = (aqs_linkage *)L;
+    CHECK_LINKAGE(ml);
+    CHECK_PTR(ml, fn, max_corrections);
+    *max_corrections = L->refine_max;
     return AQS_OK;
 }
 
@@ -777,6 +801,12 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
         }
         adaptive_solve(L);
         path = L->s.eps == 0.0 && L->s.max_computed == 0 ? AQS_PATH_EXACT_DCA : AQS_PATH_ADAPTIVE;
+        /* every joint through the DCA's back-substitution: refined to the
+         * articulated-body solve's accuracy (docs/math.md §13a) */
+        if (path == AQS_PATH_EXACT_DCA && (st = refine_exact(L)) != AQS_OK) {
+            stale_solve_failed(L);
+            return st;
+        }
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         stale_solve_failed(L);

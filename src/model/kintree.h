@@ -27,6 +27,18 @@ static inline void kin_unpack_inertia(const double *P, double *F)
         for (j = 0; j < 3; j++) F[6 * i + 3 + j] = F[6 * (3 + j) + i] = P[KIN_PB + 3 * i + j];
 }
 
+/* o = I v for a packed spatial inertia I. */
+static inline void kin_inertia_mul(const double *I, const double *v, double *o)
+{
+    const double *A = I + KIN_PA, *B = I + KIN_PB, *C = I + KIN_PC;
+    o[0] = A[0] * v[0] + A[1] * v[1] + A[2] * v[2] + B[0] * v[3] + B[1] * v[4] + B[2] * v[5];
+    o[1] = A[1] * v[0] + A[3] * v[1] + A[4] * v[2] + B[3] * v[3] + B[4] * v[4] + B[5] * v[5];
+    o[2] = A[2] * v[0] + A[4] * v[1] + A[5] * v[2] + B[6] * v[3] + B[7] * v[4] + B[8] * v[5];
+    o[3] = B[0] * v[0] + B[3] * v[1] + B[6] * v[2] + C[0] * v[3] + C[1] * v[4] + C[2] * v[5];
+    o[4] = B[1] * v[0] + B[4] * v[1] + B[7] * v[2] + C[1] * v[3] + C[3] * v[4] + C[4] * v[5];
+    o[5] = B[2] * v[0] + B[5] * v[1] + B[8] * v[2] + C[2] * v[3] + C[4] * v[4] + C[5] * v[5];
+}
+
 /* X: the composite's frame in its parent's, the joint placement composed
  * with J(q). Revolute and prismatic joints written out. */
 static inline void kin_joint_pose(const aqs_linkage *L, const aba_joint *jt, pose *X)

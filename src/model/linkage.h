@@ -214,6 +214,7 @@ typedef struct {
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
     int certified;          /* aqs_solve_stats.certified */
+    int32_t refined;        /* corrections the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/solve/aba.c). Its data
@@ -337,6 +338,7 @@ struct aqs_linkage {
     double *welded_acc; /* scratch for fixed-joint forces */
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
+    int32_t refine_max;   /* corrections of an exact DCA solve (aqs_linkage_set_exact_refinement) */
     int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
@@ -345,6 +347,8 @@ struct aqs_linkage {
     aba_state aba;
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
     struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
+    struct refine *rf;     /* the exact DCA solve's refinement arrays (src/solve/refine.c); NULL until
+                              an exact DCA solve refines */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;

@@ -338,18 +338,6 @@ ABA_INLINE void motion_from_parent(const pose *P, const double *v, double *o)
     o[5] = R[2] * t0 + R[5] * t1 + R[8] * t2;
 }
 
-/* o = I v for packed I. */
-ABA_INLINE void inertia_mul(const double *I, const double *v, double *o)
-{
-    const double *A = I + KIN_PA, *B = I + KIN_PB, *C = I + KIN_PC;
-    o[0] = A[0] * v[0] + A[1] * v[1] + A[2] * v[2] + B[0] * v[3] + B[1] * v[4] + B[2] * v[5];
-    o[1] = A[1] * v[0] + A[3] * v[1] + A[4] * v[2] + B[3] * v[3] + B[4] * v[4] + B[5] * v[5];
-    o[2] = A[2] * v[0] + A[4] * v[1] + A[5] * v[2] + B[6] * v[3] + B[7] * v[4] + B[8] * v[5];
-    o[3] = B[0] * v[0] + B[3] * v[1] + B[6] * v[2] + C[0] * v[3] + C[1] * v[4] + C[2] * v[5];
-    o[4] = B[1] * v[0] + B[4] * v[1] + B[7] * v[2] + C[1] * v[3] + C[3] * v[4] + C[4] * v[5];
-    o[5] = B[2] * v[0] + B[5] * v[1] + B[8] * v[2] + C[2] * v[3] + C[4] * v[4] + C[5] * v[5];
-}
-
 /* D = S^T U (d x d) from the rows U_k = IA S_k; its inverse into Dinv.
  * Returns 0, or -1 when D is not numerically positive definite. */
 static int joint_space_inverse(const double *S, const double *U, int d, double *Dinv)
@@ -567,7 +555,7 @@ static void forward(aqs_linkage *L)
         } else {
             forward_general(L, jt, nd, ac);
         }
-        inertia_mul(nd->IA, ac, f);
+        kin_inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
         memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
         memset(nd->pA, 0, sizeof nd->pA);
@@ -579,7 +567,7 @@ static void forward(aqs_linkage *L)
  * not even be allocated) from the joint forces just computed: the force on
  * the composite through handle h, in the handle's frame (its own frame for
  * its parent joint, the joint frame for a joint it holds up). */
-static void welded_forces(aqs_linkage *L)
+void aba_welded_forces(aqs_linkage *L)
 {
     const model *m = &L->m;
     const tree *t = &L->t;
@@ -627,7 +615,7 @@ aqs_status aba_solve(aqs_linkage *L)
     }
     forward(L);
     L->aba.x_valid = 1;
-    welded_forces(L);
+    aba_welded_forces(L);
     L->aba.x_valid = 0;
     adaptive_mark_exact(L);
     L->t.nodes_updated = 0;

@@ -15,6 +15,10 @@ void aba_free(aqs_linkage *L);
  * as an exact solve. Returns AQS_OK, or AQS_ENUMERIC (message set) when an
  * articulated inertia is numerically singular. */
 aqs_status aba_solve(aqs_linkage *L);
+/* The fixed joints' forces from the moving joints' forces in L->cforce (the
+ * composites with welded bodies, through dca_welded_forces_comp): after
+ * aba_solve, and after a refined exact DCA solve (src/solve/refine.c). */
+void aba_welded_forces(aqs_linkage *L);
 /* The poses and inertias read from the solver's order: kintree.h. */
 
 #endif

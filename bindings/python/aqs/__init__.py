@@ -76,7 +76,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_FIXED, JOINT_FREE, JOINT_KINDS, JOINT_PLANAR, JOINT_PRISMATIC,
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
-                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN,
+                   EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN, REFINEMENT_MAX,
                    PATH_ADAPTIVE, PATH_EXACT_ABA, PATH_EXACT_DCA,
                    DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE,
@@ -97,7 +97,7 @@ __all__ = [
     "METRIC_ABS_WORLD", "METRIC_REL_WORLD", "METRICS",
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
-    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN",
+    "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN", "REFINEMENT_MAX",
     "PATH_ADAPTIVE", "PATH_EXACT_ABA", "PATH_EXACT_DCA",
     "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
@@ -990,6 +990,20 @@ class Linkage:
         value = ctypes.c_int32()
         self._call("aqs_linkage_get_exact_solver", ctypes.byref(value))
         return EXACT_SOLVER_NAMES[value.value]
+
+    def set_exact_refinement(self, max_corrections):
+        """At most max_corrections (0 .. 3, default 3; 0: off) corrections
+        of an exact DCA solve by the DCA itself with the inverse-dynamics
+        residual as the load, each kept only when it lowers the residual
+        (aqs_linkage_set_exact_refinement, docs/math.md 13a). Any phase."""
+        self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
+
+    @property
+    def exact_refinement(self):
+        """The maximum corrections of an exact DCA solve (aqs_linkage_get_exact_refinement)."""
+        value = ctypes.c_int32()
+        self._call("aqs_linkage_get_exact_refinement", ctypes.byref(value))
+        return value.value
 
     def refine(self, eps):
         """Refine the last solve down to a smaller eps, same measure, by

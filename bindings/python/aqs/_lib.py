@@ -100,6 +100,9 @@ EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tre
 # fraction of the joints (aqs_linkage_set_exact_fallback).
 FALLBACK_RUN = 15
 
+# Most corrections of an exact DCA solve, and the default (AQS_REFINEMENT_MAX).
+REFINEMENT_MAX = 3
+
 # Default margin of aqs_linkage_set_prediction (AQS_PREDICTION_MARGIN).
 PREDICTION_MARGIN = 1024.0
 
@@ -375,6 +378,8 @@ PROTOTYPES = {
     "aqs_linkage_set_joint_bound": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_set_exact_solver": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_exact_solver": (status_t, [linkage_p, int32_p]),
+    "aqs_linkage_set_exact_refinement": (status_t, [linkage_p, ctypes.c_int32]),
+    "aqs_linkage_get_exact_refinement": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_dca_form": (status_t, [linkage_p, ctypes.c_int32]),
     "aqs_linkage_get_dca_form": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),

@@ -1,0 +1,196 @@
+/* refine.c -- iterative refinement of the exact DCA solve (docs/math.md
+ * §13a). The DCA's back-substitution computes a light body's joint
+ * acceleration between heavy ones as rho - QX x, a difference of large
+ * terms: its error is about u times the local mass ratio (or 1/delta near
+ * equilibrium), not u. Classical fixed-precision refinement repairs that:
+ *     r = Q - ID(qdd)            (src/solve/residual.c, the real loads)
+ *     qdd <- qdd + DCA^-1(r)     (the same node coefficients, r the only
+ *                                 load: no gravity, no external force)
+ * Each correction multiplies the error by about the DCA's own relative error
+ * level (< 1), until the residual's rounding limits it, which is what the
+ * backward-stable articulated-body solve sees too.
+ *
+ * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
+ * out bit for bit the same, the positions being unchanged; rho, gamma and b
+ * with the residual as the load) and the back-substitution into scratch; the
+ * unrefined solve's load-dependent values are saved first and put back at
+ * the end, so the lazy update's next solve finds them as they were. */
+#include "refine.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "aba.h"
+#include "dca.h"
+#include "residual.h"
+
+/* The size of a correction (units of u, relative) after which no further one
+ * is tried (resolved below); at most L->refine_max corrections
+ * (aqs_linkage_set_exact_refinement). */
+#define REFINE_LEVEL 1024.0
+
+struct refine {
+    double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
+                       gamma (d + 6), then 5 rounding levels */
+    double *r, *r2; /* nv: the residual of the accepted and of the candidate accelerations */
+    double *dq;     /* nv: the correction */
+    double *q1;     /* nv: the candidate */
+    double *df;     /* 6 njoints: the correction's joint forces (not used after) */
+};
+
+void refine_free(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    if (!R) return;
+    lk_free(L, R->save);
+    lk_free(L, R->r);
+    lk_free(L, R->r2);
+    lk_free(L, R->dq);
+    lk_free(L, R->q1);
+    lk_free(L, R->df);
+    lk_free(L, R);
+    L->rf = NULL;
+}
+
+static aqs_status refine_alloc(aqs_linkage *L)
+{
+    const tree *t = &L->t;
+    struct refine *R;
+    size_t n = 0, nv = (size_t)L->nv + 1;
+    int32_t k;
+    if (L->rf) return AQS_OK;
+    for (k = 0; k < t->nnodes; k++) {
+        const node *nd = &t->nodes[k];
+        n += 12 * (size_t)nd->nh + (nd->joint >= 0 ? (size_t)nd->d + 6 + 5 : 0);
+    }
+    R = lk_calloc_in(L, LK_MEM_DCA, 1, sizeof *R);
+    if (!R) return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
+    L->rf = R;
+    R->save = lk_calloc_in(L, LK_MEM_DCA, n + 1, sizeof(double));
+    R->r = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
+    R->r2 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
+    R->dq = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
+    R->q1 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
+    R->df = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->njoints + 1, sizeof(double));
+    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->df) {
+        refine_free(L);
+        return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
+    }
+    return AQS_OK;
+}
+
+/* The load-dependent node values into R->save (dir 0) or back (dir 1). */
+static void save_loads(aqs_linkage *L, int dir)
+{
+    tree *t = &L->t;
+    double *s = L->rf->save;
+    int32_t k;
+    for (k = 0; k < t->nnodes; k++) {
+        const node *nd = &t->nodes[k];
+        double *b = t->data + nd->bv; /* b, then the handle forces */
+        const size_t nb = 12 * (size_t)nd->nh;
+        if (dir) memcpy(b, s, nb * sizeof(double));
+        else memcpy(s, b, nb * sizeof(double));
+        s += nb;
+        if (nd->joint < 0) continue;
+        {
+            double *rg = t->data + nd_rho(nd); /* rho, then gamma */
+            const size_t ng = (size_t)nd->d + 6;
+            if (dir) memcpy(rg, s, ng * sizeof(double));
+            else memcpy(s, rg, ng * sizeof(double));
+            s += ng;
+            if (t->rnd_node) {
+                if (dir) memcpy(t->rnd_node + 5 * (size_t)k, s, 5 * sizeof(double));
+                else memcpy(s, t->rnd_node + 5 * (size_t)k, 5 * sizeof(double));
+            }
+            s += 5;
+        }
+    }
+}
+
+/* dq = DCA^-1(r): every leaf's b zero (no gravity, no load), the node update
+ * with r as the joint forces, the back-substitution into R's scratch.
+ * Returns 0, or -1 when a node update fails (r not finite). */
+static int correction(aqs_linkage *L, double *r)
+{
+    tree *t = &L->t;
+    struct refine *R = L->rf;
+    double *tau = L->tau, *qdd = L->qdd, *cforce = L->cforce;
+    int32_t n, fail = 0;
+    for (n = 0; n < t->nnodes; n++) {
+        const node *nd = &t->nodes[n];
+        if (nd->joint < 0) memset(t->data + nd->bv, 0, 6 * (size_t)nd->nh * sizeof(double));
+    }
+    L->tau = r;
+    for (n = 0; n < t->nnodes && !fail; n++) /* children first */
+        if (t->nodes[n].joint >= 0 && dca_node_update(L, n) != 0) fail = 1;
+    L->tau = tau;
+    if (fail) return -1;
+    memset(t->data + nd_xf(&t->nodes[t->root]), 0, 6 * (size_t)t->nodes[t->root].nh * sizeof(double));
+    L->qdd = R->dq;
+    L->cforce = R->df;
+    for (n = t->nnodes - 1; n >= 0; n--) /* parents first */
+        if (t->nodes[n].joint >= 0) dca_node_backsub(L, n);
+    L->qdd = qdd;
+    L->cforce = cforce;
+    return 0;
+}
+
+/* No further correction is worth a node pass: the last one was at most
+ * REFINE_LEVEL u ||q1|| (max norms). Each correction multiplies the error by
+ * about the DCA's relative error level on that load, so the next one would be
+ * that much smaller again: at the rounding level, where the random trees'
+ * first correction (4e2 .. 7e2 u) already leaves them. */
+static int resolved(const double *dq, const double *q1, int32_t nv)
+{
+    const double u = 1.1102230246251565e-16;
+    double qmax = 0.0, dmax = 0.0;
+    int32_t i;
+    for (i = 0; i < nv; i++) {
+        qmax = fmax(qmax, fabs(q1[i]));
+        dmax = fmax(dmax, fabs(dq[i]));
+    }
+    return dmax <= REFINE_LEVEL * u * qmax;
+}
+
+aqs_status refine_exact(aqs_linkage *L)
+{
+    struct refine *R;
+    double rn, *tmp;
+    int32_t sweep, i, nv = L->nv, kept = 0, current = 1;
+    aqs_status st;
+    L->s.refined = 0;
+    if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return AQS_OK;
+    if ((st = refine_alloc(L)) != AQS_OK) return st;
+    R = L->rf;
+    residual_poses(L);
+    rn = residual_eval(L, L->qdd, R->r);
+    if (!isfinite(rn) || rn == 0.0) return AQS_OK;
+    save_loads(L, 0);
+    for (sweep = 0; sweep < L->refine_max; sweep++) {
+        double rn1;
+        if (correction(L, R->r) != 0) break;
+        for (i = 0; i < nv; i++) R->q1[i] = L->qdd[i] + R->dq[i];
+        rn1 = residual_eval(L, R->q1, R->r2);
+        current = 0;
+        /* kept only when finite (the residual of a non-finite candidate is
+         * not) and the residual went down */
+        if (!(isfinite(rn1) && rn1 < rn)) break;
+        memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
+        tmp = R->r, R->r = R->r2, R->r2 = tmp;
+        rn = rn1;
+        current = 1;
+        kept++;
+        if (rn == 0.0 || resolved(R->dq, R->q1, nv)) break;
+    }
+    save_loads(L, 1);
+    if (kept) {
+        /* the joint forces of the refined accelerations: the last residual's
+         * when it was the kept one */
+        if (!current) (void)residual_eval(L, L->qdd, R->r2);
+        residual_forces(L, L->cforce);
+        if (L->m.nwelded > 0) aba_welded_forces(L);
+    }
+    L->s.refined = kept;
+    return AQS_OK;
+}

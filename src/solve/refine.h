@@ -1,0 +1,20 @@
+/* refine.h -- iterative refinement of the exact DCA solve (docs/math.md
+ * §13a): corrections by the DCA itself, with the joint-space residual of
+ * src/solve/residual.c as its only load. */
+#ifndef AQS_REFINE_H
+#define AQS_REFINE_H
+
+#include "linkage.h"
+
+/* After an exact DCA solve (adaptive_solve with eps = 0 and no cap, the
+ * coefficients current): up to L->refine_max corrections of L->qdd, each
+ * kept only when it is finite and lowers the residual's 2-norm; L->cforce
+ * then holds the inverse dynamics' forces of the refined accelerations
+ * (fixed joints' included). The DCA's stored load-dependent values (b, rho,
+ * gamma, handle forces, the rounding levels) are those of the unrefined
+ * solve again on return; the solve's stats are not changed. AQS_ENOMEM
+ * (message set) when its arrays cannot be allocated. */
+aqs_status refine_exact(aqs_linkage *L);
+void refine_free(aqs_linkage *L);
+
+#endif

@@ -1,0 +1,101 @@
+/* residual.c -- the joint-space residual of a quasi-static solution (all
+ * velocities zero), r = Q - ID(qdd), by the recursive Newton-Euler algorithm
+ * over the articulated-body order (parents before children), in the
+ * conventions of src/solve/aba.c: with X the motion transform from the parent
+ * composite's frame to c's, S the joint's motion subspace and f_ext,c the
+ * composite's external load in its frame,
+ *   outward:  a_c = X a_p + S qdd   (the world moves with a_0 = -g)
+ *             f_c = I_c a_c - f_ext,c
+ *   inward:   f_p += X^T f_c,  r_e = Q_e - S^T f_c
+ * f_c is then the force of joint e on c, L->cforce's convention. Every body's
+ * inertia enters once and every load once: the residual of the
+ * articulated-body solve's own answer is at the rounding level (tests/
+ * test_refine.c). In working precision: a residual in double-double was
+ * measured to buy nothing refinement could use, at 7x the cost (docs/math.md
+ * §13a). Scratch: the articulated-body solver's per-solve node values (X, and
+ * v.s for a_c and f_c), which every solve that reads them rewrites first. */
+#include "residual.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "kintree.h"
+
+void residual_poses(aqs_linkage *L)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    for (k = 0; k < L->m.ne; k++) kin_joint_pose(L, &a->joint[k], &a->node[k].X);
+}
+
+double residual_eval(aqs_linkage *L, const double *qdd, double *r)
+{
+    const model *m = &L->m;
+    aba_state *a = &L->aba;
+    double g[6], sq = 0.0, S[36];
+    int32_t k, i, j;
+    for (i = 0; i < 3; i++) {
+        g[i] = 0.0;
+        g[3 + i] = -L->gravity[i];
+    }
+    for (k = 0; k < m->ne; k++) { /* outward: accelerations, then I a */
+        const aba_joint *jt = &a->joint[k];
+        aba_node *nd = &a->node[k];
+        const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc, *qd = qdd + jt->voff;
+        double *ac = nd->v.s.acc;
+        spatial_xform_motion(&nd->X, ap, ac);
+        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+            const int o = jt->type == AQS_JOINT_REVOLUTE ? 0 : 3;
+            for (i = 0; i < 3; i++) ac[o + i] += jt->axis[i] * qd[0];
+        } else {
+            const int d = joint_nv(jt->type);
+            joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
+            for (i = 0; i < 6; i++) {
+                double v = 0.0;
+                for (j = 0; j < d; j++) v += S[i * d + j] * qd[j];
+                ac[i] += v;
+            }
+        }
+        kin_inertia_mul(jt->I, ac, nd->v.s.U);
+    }
+    for (i = 0; i < m->nloaded_comps; i++) { /* minus the loads (none on the world) */
+        const int32_t c = m->loaded_comps[i];
+        double *f = a->node[a->pos_of_comp[c]].v.s.U;
+        for (j = 0; j < 6; j++) f[j] -= m->comp_force[6 * c + j];
+    }
+    for (k = m->ne - 1; k >= 0; k--) { /* inward: children's forces are in */
+        const aba_joint *jt = &a->joint[k];
+        aba_node *nd = &a->node[k];
+        const double *f = nd->v.s.U, *Q = L->tau + jt->voff;
+        double *rk = r + jt->voff;
+        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+            const double *x = jt->axis, *fo = f + (jt->type == AQS_JOINT_REVOLUTE ? 0 : 3);
+            const double s = x[0] * fo[0] + x[1] * fo[1] + x[2] * fo[2];
+            rk[0] = Q[0] - s;
+            sq += rk[0] * rk[0];
+        } else {
+            const int d = joint_nv(jt->type);
+            joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
+            for (j = 0; j < d; j++) {
+                double s = 0.0;
+                for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
+                rk[j] = Q[j] - s;
+                sq += rk[j] * rk[j];
+            }
+        }
+        if (jt->parent >= 0) {
+            double t[6], *fp = a->node[jt->parent].v.s.U;
+            spatial_xform_force_back(&nd->X, f, t);
+            for (i = 0; i < 6; i++) fp[i] += t[i];
+        }
+    }
+    return sqrt(sq);
+}
+
+void residual_forces(const aqs_linkage *L, double *cforce)
+{
+    const aba_state *a = &L->aba;
+    int32_t k;
+    for (k = 0; k < L->m.ne; k++)
+        memcpy(cforce + 6 * (size_t)a->joint[k].joint, a->node[k].v.s.U, 6 * sizeof(double));
+}
