@@ -863,7 +863,8 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
 
 /** Iterative refinement of the exact DCA solve (docs/math.md 13a): after a
  *  solve that computes every joint through the DCA's back-substitution
- *  (AQS_EXACT_DCA, or eps = 0 without a cap), at most max_corrections
+ *  (AQS_EXACT_DCA, eps = 0 without a cap, or an adaptive solve that ended
+ *  up computing every joint: error_bound 0), at most max_corrections
  *  corrections qdd += DCA^-1(Q - ID(qdd)), each kept only when it is finite
  *  and lowers the inverse-dynamics residual; the constraint forces are then
  *  those of the refined accelerations. Each costs about one more pass over

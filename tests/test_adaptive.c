@@ -119,10 +119,14 @@ static void check_bounds(aqs_linkage *L, tally *t, double abs_floor)
     exact = malloc(sizeof(double) * (size_t)(nv + 1));
     approx = malloc(sizeof(double) * (size_t)(nv + 1));
     /* the reference: every joint back-substituted from the same coefficients
-     * without the exact solve's refinement (docs/math.md §13a), as the
-     * adaptive solves compute them: eps = 0 with a cap of every joint */
+     * without the refinement (docs/math.md §13a), as the adaptive solves that
+     * skip joints compute them: eps = 0 with a cap of every joint. The
+     * refinement stays off for the sweep: error_bound is about skipping
+     * (the DCA's own answer); a sweep solve that computes every joint would
+     * otherwise be refined (tests/test_refine.c tests that) */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_max_computed(L, L->njoints + 1), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(L, exact, (size_t)nv), AQS_OK);
@@ -152,6 +156,7 @@ static void check_bounds(aqs_linkage *L, tally *t, double abs_floor)
             if (st.error_bound > 0 && err / st.error_bound > t->worst_ratio)
                 t->worst_ratio = err / st.error_bound;
         }
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, AQS_REFINEMENT_MAX), AQS_OK);
     free(exact);
     free(approx);
 }
@@ -1030,11 +1035,16 @@ static void test_prediction(void **state)
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
         /* unrefined (docs/math.md §13a): every joint through the adaptive path */
         assert_int_equal(aqs_linkage_set_max_computed(X, X->njoints + 1), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
         assert_int_equal(aqs_linkage_get_prediction(L, &m), AQS_OK);
         assert_true(m == AQS_PREDICTION_MARGIN);
         assert_int_equal(aqs_linkage_set_prediction(O, 0.0), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive steps only */
         assert_int_equal(aqs_linkage_set_auto(O, 0), AQS_OK);
+        /* the bound against the unrefined twin: a step computing every joint
+         * unrefined too (refinement: tests/test_refine.c) */
+        assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_refinement(O, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_tolerance(L, metric, eps), AQS_OK);
         assert_int_equal(aqs_linkage_set_tolerance(O, metric, eps), AQS_OK);
         nv = L->nv;
@@ -1143,7 +1153,9 @@ static void test_prediction_refine(void **state)
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
         /* unrefined (docs/math.md §13a): every joint through the adaptive path */
         assert_int_equal(aqs_linkage_set_max_computed(X, X->njoints + 1), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* adaptive solves and refines */
+        assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK); /* as the twin */
         nv = L->nv;
         exact = malloc(sizeof(double) * (size_t)(nv + 1));
         approx = malloc(sizeof(double) * (size_t)(nv + 1));

@@ -158,9 +158,17 @@ static void test_altmass(void **state)
          * (seed 1); no extended-precision reference of the forces here, so
          * this only says the two double answers agree that far. */
         assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 1e-10);
-        /* without refinement: not reached */
+        /* an adaptive solve that computes every joint (here through a cap of
+         * every joint) is refined the same way */
         assert_int_equal(aqs_linkage_set_max_computed(L, nj + 1), AQS_OK);
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_true(L->s.refined >= 1);
+        assert_int_equal(aqs_linkage_get_accelerations(L, qu, (size_t)nv), AQS_OK);
+        assert_true(test_rel_diff(qu, qa, (size_t)nv) <= 1e-13);
+        /* without refinement: not reached */
+        assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(L->s.refined, 0);
         assert_int_equal(aqs_linkage_get_accelerations(L, qu, (size_t)nv), AQS_OK);
         assert_true(test_rel_diff(qu, qa, (size_t)nv) > 1e-12);
         free(qa), free(qd), free(qu), free(fa), free(fd);
@@ -197,6 +205,59 @@ static void test_state_restored(void **state)
     free(qa), free(qb);
     aqs_linkage_destroy(A);
     aqs_linkage_destroy(B);
+}
+
+/* An adaptive solve (eps > 0, no cap) whose heap ran empty computed every
+ * joint through the DCA's back-substitution: it is refined like the exact
+ * solve (within 1e-13 of the ABA, as test_altmass), and reports bound 0. A
+ * solve that skips joints is not: its accelerations are bit for bit those of
+ * a twin with the refinement off. */
+static void test_adaptive_all(void **state)
+{
+    aqs_linkage *L = altmass(100, 1e6, 0, 3), *X = altmass(100, 1e6, 0, 3);
+    int32_t nv;
+    double *qa, *qd, *qx;
+    aqs_solve_stats st;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
+    qa = calloc((size_t)nv, sizeof *qa);
+    qd = calloc((size_t)nv, sizeof *qd);
+    qx = calloc((size_t)nv, sizeof *qx);
+    assert_non_null(qa && qd && qx);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA */
+    assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(X, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -60)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(X, AQS_METRIC_REL_JOINT, ldexp(1.0, -60)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.computed_joints, st.counted_joints);
+    assert_true(st.error_bound == 0.0);
+    assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
+    assert_true(L->s.refined >= 1);
+    assert_int_equal(X->s.refined, 0);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(X, qx, (size_t)nv), AQS_OK);
+    assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-13);
+    assert_true(test_rel_diff(qx, qa, (size_t)nv) > 1e-12); /* the unrefined twin: not reached */
+    /* a solve that skips joints: not refined */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.125), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(X, AQS_METRIC_REL_JOINT, 0.125), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_true(st.computed_joints < st.counted_joints);
+    assert_int_equal(L->s.refined, 0);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(X, qx, (size_t)nv), AQS_OK);
+    assert_memory_equal(qd, qx, sizeof(double) * (size_t)nv);
+    free(qa), free(qd), free(qx);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
 }
 
 /* aqs_linkage_set_exact_refinement: 0 turns it off (the unrefined answer,
@@ -257,6 +318,7 @@ int main(void)
         cmocka_unit_test(test_residual_of_aba),
         cmocka_unit_test(test_altmass),
         cmocka_unit_test(test_state_restored),
+        cmocka_unit_test(test_adaptive_all),
         cmocka_unit_test(test_setting),
         cmocka_unit_test(test_rest),
     };

@@ -774,6 +774,7 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
     int32_t path;
     L->exact_by_aba = 0;
     L->fb_last = 0;
+    L->s.refined = 0;
     if (!fb && autopath_applies(L)) {
         /* the stale marks of the loads first: the model counts them (on a
          * moved tree only the marks: the chosen path re-expresses the loads) */
@@ -801,9 +802,10 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
         }
         adaptive_solve(L);
         path = L->s.eps == 0.0 && L->s.max_computed == 0 ? AQS_PATH_EXACT_DCA : AQS_PATH_ADAPTIVE;
-        /* every joint through the DCA's back-substitution: refined to the
+        /* every joint through the DCA's back-substitution (the exact path, or
+         * an adaptive solve that computed them all): refined to the
          * articulated-body solve's accuracy (docs/math.md §13a) */
-        if (path == AQS_PATH_EXACT_DCA && (st = refine_exact(L)) != AQS_OK) {
+        if ((path == AQS_PATH_EXACT_DCA || L->s.nprocessed == L->m.ne) && (st = refine_exact(L)) != AQS_OK) {
             stale_solve_failed(L);
             return st;
         }

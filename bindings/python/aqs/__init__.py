@@ -993,9 +993,11 @@ class Linkage:
 
     def set_exact_refinement(self, max_corrections):
         """At most max_corrections (0 .. 3, default 3; 0: off) corrections
-        of an exact DCA solve by the DCA itself with the inverse-dynamics
-        residual as the load, each kept only when it lowers the residual
-        (aqs_linkage_set_exact_refinement, docs/math.md 13a). Any phase."""
+        of a solve computing every joint through the DCA (the exact DCA
+        solve, or an adaptive solve that computed every joint) by the DCA
+        itself with the inverse-dynamics residual as the load, each kept
+        only when it lowers the residual (aqs_linkage_set_exact_refinement,
+        docs/math.md 13a). Any phase."""
         self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
 
     @property
