@@ -170,6 +170,8 @@ $(BUILD)/tests/%: tests/%.c $(TEST_SUPPORT) $(wildcard tests/support/*.h) $(INTL
 $(BUILD)/tests/test_worldbound: bench/scenes.c bench/scenes.h
 $(BUILD)/tests/test_worldbound: TEST_EXTRA := -Ibench
 $(BUILD)/tests/test_worldbound: TEST_EXTRA_SRC := bench/scenes.c
+# Several linkages in several threads at once (POSIX threads).
+$(BUILD)/tests/test_threads: TEST_EXTRA := -pthread
 
 $(BUILD)/tests/reference/%: tests/reference/%.cpp $(wildcard tests/reference/*.hpp) $(SHLIB)
 	@mkdir -p $(dir $@)
