@@ -234,9 +234,37 @@ static inline void dot2_dup(const double *a, const double *b, const __m128d *vd,
     _mm_storel_pd(s, acc);
     _mm_storeh_pd(t, acc);
 }
+/* two dot2_dup in one loop: rows a, b in one register, g, h in the other */
+static inline void dot4_dup(const double *a, const double *b, const double *g, const double *h, const __m128d *vd,
+                            int32_t m, double *s, double *t, double *u, double *z)
+{
+    __m128d acc = _mm_setzero_pd(), acd = _mm_setzero_pd();
+    int32_t j;
+    for (j = 0; j < m; j++) {
+        acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), vd[j]));
+        acd = _mm_add_pd(acd, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(g + j), h + j), vd[j]));
+    }
+    _mm_storel_pd(s, acc);
+    _mm_storeh_pd(t, acc);
+    _mm_storel_pd(u, acd);
+    _mm_storeh_pd(z, acd);
+}
 #define DOT2(a, b, s, t) (m <= DCA_VDUP ? dot2_dup(a, b, vd, m, s, t) : dot2(a, b, v, m, s, t))
+#define DOT4(a, b, g, h, s, t, u, z)                                                                                 \
+    do {                                                                                                             \
+        if (m <= DCA_VDUP) dot4_dup(a, b, g, h, vd, m, s, t, u, z);                                                  \
+        else {                                                                                                       \
+            dot2(a, b, v, m, s, t);                                                                                  \
+            dot2(g, h, v, m, u, z);                                                                                  \
+        }                                                                                                            \
+    } while (0)
 #else
 #define DOT2(a, b, s, t) dot2(a, b, v, m, s, t)
+#define DOT4(a, b, g, h, s, t, u, z)                                                                                 \
+    do {                                                                                                             \
+        dot2(a, b, v, m, s, t);                                                                                      \
+        dot2(g, h, v, m, u, z);                                                                                      \
+    } while (0)
 #endif
 
 static inline void axpy1(double *a, double s, const double *v, int32_t m)
@@ -284,8 +312,16 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
 #ifdef DCA_SSE2
     __m128d vd[DCA_VDUP];
 #endif
-    for (j = 1; j < m; j++)
-        if (fabs(x[j]) > scale) scale = fabs(x[j]);
+    /* the copy v = x and its sum of squares (in column order from 0.0, as
+     * below) in the same pass as the scale */
+    v[0] = x[0];
+    ss = x[0] * x[0];
+    for (j = 1; j < m; j++) {
+        const double y = x[j];
+        v[j] = y;
+        ss += y * y;
+        if (fabs(y) > scale) scale = fabs(y);
+    }
     if (scale == 0.0) return; /* nothing right of the pivot */
     if (fabs(x[0]) > scale) scale = fabs(x[0]);
     /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
@@ -293,14 +329,11 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
      * entries underflow or overflow in alpha v0. A power-of-two scale changes
      * every later quantity by an exact power of two, and the reflected rows not
      * at all, so between 2^-100 and 2^100, where nothing can underflow or
-     * overflow, it is left out: the same results, bit for bit. */
-    if (scale >= 0x1p-100 && scale <= 0x1p100) {
-        for (j = 0; j < m; j++) {
-            v[j] = x[j];
-            ss += v[j] * v[j];
-        }
-    } else {
+     * overflow, it is left out: the same results, bit for bit (v and ss are
+     * then the ones computed above). */
+    if (!(scale >= 0x1p-100 && scale <= 0x1p100)) {
         int e;
+        ss = 0.0;
         frexp(scale, &e);
         scale = ldexp(1.0, e); /* a power of two: x / scale is exact */
         for (j = 0; j < m; j++) {
@@ -319,8 +352,7 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
     for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
         double s, t, u, z;
-        DOT2(a, b, &s, &t);
-        DOT2(g, h, &u, &z);
+        DOT4(a, b, g, h, &s, &t, &u, &z);
         s *= f;
         t *= f;
         u *= f;
