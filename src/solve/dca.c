@@ -177,6 +177,31 @@ static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
     for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = sm;
 }
 
+/* The squared Frobenius norm of mp_y's Y, summed in the same order (row by
+ * row) with the same entries: Y's zero entries, left out, add exact zeros
+ * (the sum starts at +0.0 and holds squares), so the sum is bit for bit that
+ * over the 36 entries of mp_y's Y. */
+static double mp_y_norm2(const double Jc[9], double sm, const double *c)
+{
+    double S[9], w = 0.0, N[9];
+    int i, j, k;
+    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
+    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
+    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
+            N[3 * i + j] = s;
+        }
+    for (i = 0; i < 9; i++) w += Jc[i] * Jc[i];
+    for (i = 0; i < 3; i++) {
+        for (j = 0; j < 3; j++) w += N[3 * i + j] * N[3 * i + j];
+        w += sm * sm;
+    }
+    return w;
+}
+
 /* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
  * Ic^-1 = Jc Jc^T (Jc = Lc^-T, Ic = Lc Lc^T). -1 if Ic is not positive definite. */
 static int mp_inverse_factor(const double *mp, double *Y)
@@ -234,37 +259,9 @@ static inline void dot2_dup(const double *a, const double *b, const __m128d *vd,
     _mm_storel_pd(s, acc);
     _mm_storeh_pd(t, acc);
 }
-/* two dot2_dup in one loop: rows a, b in one register, g, h in the other */
-static inline void dot4_dup(const double *a, const double *b, const double *g, const double *h, const __m128d *vd,
-                            int32_t m, double *s, double *t, double *u, double *z)
-{
-    __m128d acc = _mm_setzero_pd(), acd = _mm_setzero_pd();
-    int32_t j;
-    for (j = 0; j < m; j++) {
-        acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), vd[j]));
-        acd = _mm_add_pd(acd, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(g + j), h + j), vd[j]));
-    }
-    _mm_storel_pd(s, acc);
-    _mm_storeh_pd(t, acc);
-    _mm_storel_pd(u, acd);
-    _mm_storeh_pd(z, acd);
-}
 #define DOT2(a, b, s, t) (m <= DCA_VDUP ? dot2_dup(a, b, vd, m, s, t) : dot2(a, b, v, m, s, t))
-#define DOT4(a, b, g, h, s, t, u, z)                                                                                 \
-    do {                                                                                                             \
-        if (m <= DCA_VDUP) dot4_dup(a, b, g, h, vd, m, s, t, u, z);                                                  \
-        else {                                                                                                       \
-            dot2(a, b, v, m, s, t);                                                                                  \
-            dot2(g, h, v, m, u, z);                                                                                  \
-        }                                                                                                            \
-    } while (0)
 #else
 #define DOT2(a, b, s, t) dot2(a, b, v, m, s, t)
-#define DOT4(a, b, g, h, s, t, u, z)                                                                                 \
-    do {                                                                                                             \
-        dot2(a, b, v, m, s, t);                                                                                      \
-        dot2(g, h, v, m, u, z);                                                                                      \
-    } while (0)
 #endif
 
 static inline void axpy1(double *a, double s, const double *v, int32_t m)
@@ -349,10 +346,54 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
     if (m <= DCA_VDUP)
         for (j = 0; j < m; j++) vd[j] = _mm_set1_pd(v[j]);
 #endif
-    for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
+    i = r0;
+#ifdef DCA_SSE2
+    if (m <= DCA_VDUP) { /* the loop below with its sums, products by f and zero tests in registers */
+        const __m128d ff = _mm_set1_pd(f), zero = _mm_setzero_pd();
+        for (; i + 3 < nrows; i += 4) {
+            double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+            __m128d st = zero, uz = zero;
+            for (j = 0; j < m; j++) {
+                st = _mm_add_pd(st, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), vd[j]));
+                uz = _mm_add_pd(uz, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(g + j), h + j), vd[j]));
+            }
+            st = _mm_mul_pd(st, ff);
+            uz = _mm_mul_pd(uz, ff);
+            if ((_mm_movemask_pd(_mm_cmpeq_pd(st, zero)) | _mm_movemask_pd(_mm_cmpeq_pd(uz, zero))) == 0) {
+                const __m128d sa = _mm_unpacklo_pd(st, st), tt = _mm_unpackhi_pd(st, st);
+                const __m128d uu = _mm_unpacklo_pd(uz, uz), zz = _mm_unpackhi_pd(uz, uz);
+                for (j = 0; j + 1 < m; j += 2) {
+                    const __m128d vv = _mm_loadu_pd(v + j);
+                    _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(sa, vv)));
+                    _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(tt, vv)));
+                    _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(uu, vv)));
+                    _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(zz, vv)));
+                }
+                if (j < m) {
+                    _mm_store_sd(a + j, _mm_sub_sd(_mm_load_sd(a + j), _mm_mul_sd(sa, vd[j])));
+                    _mm_store_sd(b + j, _mm_sub_sd(_mm_load_sd(b + j), _mm_mul_sd(tt, vd[j])));
+                    _mm_store_sd(g + j, _mm_sub_sd(_mm_load_sd(g + j), _mm_mul_sd(uu, vd[j])));
+                    _mm_store_sd(h + j, _mm_sub_sd(_mm_load_sd(h + j), _mm_mul_sd(zz, vd[j])));
+                }
+            } else {
+                double s, t, u, z;
+                _mm_storel_pd(&s, st);
+                _mm_storeh_pd(&t, st);
+                _mm_storel_pd(&u, uz);
+                _mm_storeh_pd(&z, uz);
+                if (s != 0.0) axpy1(a, s, v, m);
+                if (t != 0.0) axpy1(b, t, v, m);
+                if (u != 0.0) axpy1(g, u, v, m);
+                if (z != 0.0) axpy1(h, z, v, m);
+            }
+        }
+    }
+#endif
+    for (; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
         double s, t, u, z;
-        DOT4(a, b, g, h, &s, &t, &u, &z);
+        dot2(a, b, v, m, &s, &t); /* (with SSE2: only past DCA_VDUP columns) */
+        dot2(g, h, v, m, &u, &z);
         s *= f;
         t *= f;
         u *= f;
@@ -929,13 +970,11 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double sA = 0.0, sB = 0.0, wa = -1.0, wb = -1.0;
         if (!A->grounded) {
             if (mp_factor(IA, JA, &sA) != 0) return -1;
-            mp_y(JA, sA, IA + 1, YA);
-            for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
+            wa = mp_y_norm2(JA, sA, IA + 1);
         }
         if (!B->grounded) {
             if (mp_factor(IB, JB, &sB) != 0) return -1;
-            mp_y(JB, sB, IB + 1, YB);
-            for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
+            wb = mp_y_norm2(JB, sB, IB + 1);
         }
         if (rA == 0 && rB == 0 && !A->grounded && !B->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
             return 1; /* the caller takes rigid_join */
