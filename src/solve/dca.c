@@ -612,32 +612,52 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         kq[k - c] = x;
     }
     /* per outer row: FX = -E^T X1^T, QX = -Kp2 X2^T, b_C = b_o + X1 E beta + X2 Kp2^T Q */
-    for (o = 0; o < orows; o++) {
-        const double *x1 = X + (int64_t)o * ncol;
-        double sb = bo[o];
 #ifdef DCA_SSE2
-        { /* E's rows two entries at a time: each FX entry's sum as below, lane by lane */
+    /* two outer rows at a time (orows is a multiple of 6): E's rows two
+     * entries at a time for FX, the two rows' b_C and QX sums in the two
+     * lanes; every sum as in the scalar loops below, lane by lane */
+    for (o = 0; o < orows; o += 2) {
+        const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol;
+        __m128d sb = _mm_loadu_pd(bo + o);
+        int32_t h;
+        for (h = 0; h < 2; h++) {
+            const double *xr = h ? x2 : x1;
             __m128d f0 = _mm_setzero_pd(), f1 = f0, f2 = f0;
             for (k = 0; k < c; k++) {
-                const __m128d xk = _mm_set1_pd(x1[k]);
+                const __m128d xk = _mm_set1_pd(xr[k]);
                 f0 = _mm_sub_pd(f0, _mm_mul_pd(_mm_loadu_pd(E + 6 * k), xk));
                 f1 = _mm_sub_pd(f1, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 2), xk));
                 f2 = _mm_sub_pd(f2, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 4), xk));
             }
-            _mm_storel_pd(FX + o, f0);
-            _mm_storeh_pd(FX + orows + o, f0);
-            _mm_storel_pd(FX + (int64_t)2 * orows + o, f1);
-            _mm_storeh_pd(FX + (int64_t)3 * orows + o, f1);
-            _mm_storel_pd(FX + (int64_t)4 * orows + o, f2);
-            _mm_storeh_pd(FX + (int64_t)5 * orows + o, f2);
+            _mm_storel_pd(FX + o + h, f0);
+            _mm_storeh_pd(FX + orows + o + h, f0);
+            _mm_storel_pd(FX + (int64_t)2 * orows + o + h, f1);
+            _mm_storeh_pd(FX + (int64_t)3 * orows + o + h, f1);
+            _mm_storel_pd(FX + (int64_t)4 * orows + o + h, f2);
+            _mm_storeh_pd(FX + (int64_t)5 * orows + o + h, f2);
         }
+        for (k = 0; k < c; k++)
+            sb = _mm_add_pd(sb, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k), _mm_set1_pd(Eb[k])));
+        for (k = c; k < w; k++)
+            sb = _mm_add_pd(sb, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k), _mm_set1_pd(kq[k - c])));
+        _mm_storeu_pd(bC + o, sb);
+        for (r = 0; r < d; r++) {
+            const double *kr = Kp + (int64_t)r * ncol;
+            __m128d x = _mm_setzero_pd();
+            for (k = c; k < w; k++)
+                x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(kr[k]), _mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k)));
+            _mm_storeu_pd(QX + (int64_t)r * orows + o, x);
+        }
+    }
 #else
+    for (o = 0; o < orows; o++) {
+        const double *x1 = X + (int64_t)o * ncol;
+        double sb = bo[o];
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
             FX[(int64_t)i * orows + o] = x;
         }
-#endif
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
         for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
         bC[o] = sb;
@@ -648,6 +668,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
             QX[(int64_t)r * orows + o] = x;
         }
     }
+#endif
     for (r = 0; r < d; r++) {
         double x = 0.0;
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
