@@ -577,15 +577,33 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     const int32_t c = 6 - d, orows = 6 * C->nh;
     double E[36], U[36], G2[36], Eb[6], gw[6];
     int32_t i, j, k, r, o;
-    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
+    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column; -1 if a pivot
+     * is zero or not finite, or an entry before its division is not finite */
+    for (i = 0; i < c; i++)
+        if (!(fabs(Lc[(int64_t)i * ncol + i]) > 0.0)) return -1;
+#ifdef DCA_SSE2
+    { /* two columns at a time, each lane as below; x * 0 is NaN only for x not finite */
+        __m128d bad = _mm_setzero_pd();
+        for (j = 0; j < 6; j += 2)
+            for (i = 0; i < c; i++) {
+                __m128d x = _mm_loadh_pd(_mm_load_sd(Tc + 6 * j + i), Tc + 6 * (j + 1) + i);
+                for (k = 0; k < i; k++)
+                    x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Lc[(int64_t)i * ncol + k]), _mm_loadu_pd(E + 6 * k + j)));
+                bad = _mm_add_pd(bad, _mm_mul_pd(x, _mm_setzero_pd()));
+                _mm_storeu_pd(E + 6 * i + j, _mm_div_pd(x, _mm_set1_pd(Lc[(int64_t)i * ncol + i])));
+            }
+        if (_mm_movemask_pd(_mm_cmpunord_pd(bad, bad)) != 0) return -1;
+    }
+#else
     for (j = 0; j < 6; j++)
         for (i = 0; i < c; i++) {
             double x = Tc[6 * j + i];
             double piv = Lc[(int64_t)i * ncol + i];
             for (k = 0; k < i; k++) x -= Lc[(int64_t)i * ncol + k] * E[6 * k + j];
-            if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
+            if (!isfinite(x)) return -1;
             E[6 * i + j] = x / piv;
         }
+#endif
     /* U = Sd^T - Kp1 E */
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
