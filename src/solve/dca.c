@@ -1167,13 +1167,17 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 for (r = 0; r < 6; r++) x += S[r * d + i] * S[r * d + j];
                 StS[d * i + j] = x;
             }
-        if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
-        for (i = 0; i < 6; i++)
-            for (j = 0; j < d; j++) {
-                double x = 0.0;
-                for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
-                Sd[i * d + j] = x;
-            }
+        if (d == 1 && StS[0] == 1.0) { /* a unit axis: (S^T S)^-1 = 1 exactly, as dense_spd_inverse gives it */
+            for (i = 0; i < 6; i++) Sd[i] = 0.0 + S[i];
+        } else {
+            if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < d; j++) {
+                    double x = 0.0;
+                    for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
+                    Sd[i * d + j] = x;
+                }
+        }
     }
     /* In place, column by column: the c constraint rows Tc^T L_k, then the d
      * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
