@@ -157,22 +157,38 @@ static int mp_factor(const double *mp, double Jc[9], double *sm)
     return 0;
 }
 
+/* N = -S^T Jc (S = skew(c)) as mp_y sums it, k = 0, 1, 2 from 0.0, less
+ * the products with S's zero diagonal (which subtract an exact zero from a
+ * sum that is never -0: the same N, bit for bit). */
+static inline void mp_n(const double Jc[9], const double *c, double N[9])
+{
+    int j;
+    for (j = 0; j < 3; j++) {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        s0 -= c[2] * Jc[3 + j];  /* S[3] = c2 */
+        s0 -= -c[1] * Jc[6 + j]; /* S[6] = -c1 */
+        s1 -= -c[2] * Jc[j];     /* S[1] = -c2 */
+        s1 -= c[0] * Jc[6 + j];  /* S[7] = c0 */
+        s2 -= c[1] * Jc[j];      /* S[2] = c1 */
+        s2 -= -c[0] * Jc[3 + j]; /* S[5] = -c0 */
+        N[j] = s0;
+        N[3 + j] = s1;
+        N[6 + j] = s2;
+    }
+}
+
 /* Y (6x6) = [Jc 0; -S^T Jc  sm 1], S = skew(c): I^-1 = Y Y^T for the mass
  * properties of mp_factor with their centre of mass at c. */
 static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
 {
-    double S[9];
-    int i, j, k;
-    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
-    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
-    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
+    double N[9];
+    int i, j;
+    mp_n(Jc, c, N);
     memset(Y, 0, 36 * sizeof(double));
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++) {
-            double s = 0.0;
             Y[6 * i + j] = Jc[3 * i + j];
-            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
-            Y[6 * (3 + i) + j] = s;
+            Y[6 * (3 + i) + j] = N[3 * i + j]; /* -S^T Jc */
         }
     for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = sm;
 }
@@ -183,17 +199,9 @@ static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
  * over the 36 entries of mp_y's Y. */
 static double mp_y_norm2(const double Jc[9], double sm, const double *c)
 {
-    double S[9], w = 0.0, N[9];
-    int i, j, k;
-    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
-    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
-    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            double s = 0.0;
-            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
-            N[3 * i + j] = s;
-        }
+    double w = 0.0, N[9];
+    int i, j;
+    mp_n(Jc, c, N);
     for (i = 0; i < 9; i++) w += Jc[i] * Jc[i];
     for (i = 0; i < 3; i++) {
         for (j = 0; j < 3; j++) w += N[3 * i + j] * N[3 * i + j];
