@@ -1206,6 +1206,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         j = 0;
 #ifdef DCA_SSE2
+        if (nz[0] == 1 && nz[1] == 1 && nz[2] == 1 && nz[3] == 1 && nz[4] == 1 && nz[5] == 1) {
+            /* an axis-aligned S (each new row one weighted row): the loop below
+             * with its weights kept broadcast and its sums of one term written out */
+            __m128d wq[6];
+            const __m128d zero = _mm_setzero_pd();
+            for (q = 0; q < 6; q++) wq[q] = _mm_set1_pd(wt[6 * q]);
+            for (; j + 1 < w; j += 2) {
+                __m128d col[6];
+                for (r = 0; r < 6; r++) col[r] = _mm_loadu_pd(rel + ncol * r + j);
+                for (q = 0; q < 6; q++) _mm_storeu_pd(rel + ncol * q + j, _mm_add_pd(zero, _mm_mul_pd(wq[q], col[ix[6 * q]])));
+            }
+        }
         for (; j + 1 < w; j += 2) { /* two columns at a time, each sum as below */
             __m128d col[6];
             for (r = 0; r < 6; r++) col[r] = _mm_loadu_pd(rel + ncol * r + j);
