@@ -1075,11 +1075,20 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         { /* the same, A's sums in the low lanes and B's in the high ones */
             __m128d W[36], Y2[36];
             for (i = 0; i < 36; i++) Y2[i] = _mm_loadh_pd(_mm_load_sd(YA + i), YB + i);
-            for (j = 0; j < 6; j++)
-                for (i = j < 3 ? 0 : 3; i < 6; i++) {
+            __m128d Lb[36];
+            for (i = 0; i < 6; i++) /* Lm broadcast once (its lower triangle) */
+                for (r = 0; r <= i; r++) Lb[6 * i + r] = _mm_set1_pd(Lm[6 * i + r]);
+            for (j = 0; j < 3; j++)
+                for (i = 0; i < 6; i++) {
                     __m128d x = Y2[6 * i + j];
-                    for (r = j < 3 ? 0 : 3; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Lm[6 * i + r]), W[6 * r + j]));
-                    W[6 * i + j] = _mm_div_pd(x, _mm_set1_pd(Lm[7 * i]));
+                    for (r = 0; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(Lb[6 * i + r], W[6 * r + j]));
+                    W[6 * i + j] = _mm_div_pd(x, Lb[7 * i]);
+                }
+            for (j = 3; j < 6; j++)
+                for (i = 3; i < 6; i++) {
+                    __m128d x = Y2[6 * i + j];
+                    for (r = 3; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(Lb[6 * i + r], W[6 * r + j]));
+                    W[6 * i + j] = _mm_div_pd(x, Lb[7 * i]);
                 }
             for (i = 0; i < 6; i++)
                 for (j = 0; j < 6; j++) {
