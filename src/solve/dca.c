@@ -613,12 +613,22 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         }
 #endif
     /* U = Sd^T - Kp1 E */
+#ifdef DCA_SSE2
+    for (r = 0; r < d; r++) /* two entries of U's row at a time, each sum as below */
+        for (j = 0; j < 6; j += 2) {
+            __m128d x = _mm_loadh_pd(_mm_load_sd(Sd + j * d + r), Sd + (j + 1) * d + r);
+            for (k = 0; k < c; k++)
+                x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Kp[(int64_t)r * ncol + k]), _mm_loadu_pd(E + 6 * k + j)));
+            _mm_storeu_pd(U + 6 * r + j, x);
+        }
+#else
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
             double x = Sd[j * d + r];
             for (k = 0; k < c; k++) x -= Kp[(int64_t)r * ncol + k] * E[6 * k + j];
             U[6 * r + j] = x;
         }
+#endif
     for (k = 0; k < c; k++) {
         double x = 0.0;
         for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
@@ -702,12 +712,21 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         rho[r] = x;
         if (!isfinite(x)) return -1;
     }
+#ifdef DCA_SSE2
+    for (i = 0; i < 6; i += 2) { /* two entries at a time, each sum as below */
+        __m128d x = _mm_setzero_pd();
+        for (k = 0; k < c; k++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + i), _mm_set1_pd(Eb[k])));
+        for (r = 0; r < d; r++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(U + 6 * r + i), _mm_set1_pd(Q[r])));
+        _mm_storeu_pd(gw + i, x);
+    }
+#else
     for (i = 0; i < 6; i++) {
         double x = 0.0;
         for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
         for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
         gw[i] = x;
     }
+#endif
     memcpy(gamma, gw, sizeof gw);
     rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, ncol, 0.0, bo);
     return 0;
