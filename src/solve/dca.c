@@ -321,7 +321,23 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
      * below) in the same pass as the scale */
     v[0] = x[0];
     ss = x[0] * x[0];
-    for (j = 1; j < m; j++) {
+    j = 1;
+#ifdef DCA_SSE2
+    { /* two entries at a time: the squares added in column order, the largest
+         magnitude by maxpd (order-free; a NaN entry is skipped, as below) */
+        const __m128d ab = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+        __m128d mx = _mm_setzero_pd();
+        for (; j + 1 < m; j += 2) {
+            const __m128d y = _mm_loadu_pd(x + j), y2 = _mm_mul_pd(y, y);
+            _mm_storeu_pd(v + j, y);
+            ss += _mm_cvtsd_f64(y2);
+            ss += _mm_cvtsd_f64(_mm_unpackhi_pd(y2, y2));
+            mx = _mm_max_pd(_mm_and_pd(y, ab), mx);
+        }
+        scale = _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(mx, mx), mx));
+    }
+#endif
+    for (; j < m; j++) {
         const double y = x[j];
         v[j] = y;
         ss += y * y;
