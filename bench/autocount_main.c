@@ -3,7 +3,7 @@
  * path"):
  *
  *   valgrind --tool=callgrind --toggle-collect=bench_counted_steps \
- *       build/bench/autocount_main MODE JOINTS FORCES STEPS
+ *       build/bench/autocount_main MODE JOINTS FORCES STEPS [FORM]
  *
  * MODE: auto (a tolerance, the automatic path on: the library's default),
  * adaptive (a tolerance, the automatic path off) or exact (eps = 0, the
@@ -13,7 +13,8 @@
  * rel_joint 2^-19, gravity off; dt as aqs-bench's (the fastest joint of the
  * exact first solve moves 1e-3 rad). One untimed solve (the full update after
  * setting the loads), then STEPS steps inside bench_counted_steps, the only
- * function callgrind counts. Prints the paths taken and the mean N_E. */
+ * function callgrind counts. Prints the paths taken and the mean N_E. FORM:
+ * sqrt (the default) or phi, aqs_linkage_set_dca_form. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,12 +47,12 @@ int main(int argc, char **argv)
 {
     aqs_linkage *L = NULL;
     int32_t joints, nf, steps, nv, k, i, exact_steps;
-    const char *mode;
+    const char *mode, *form = argc > 5 ? argv[5] : "sqrt";
     double *qdd, amax = 0.0, dt, mean_ne;
     bench_rng rng;
     unsigned char *used;
-    if (argc != 5) {
-        fprintf(stderr, "usage: autocount_main auto|adaptive|exact JOINTS FORCES STEPS\n");
+    if (argc != 5 && argc != 6) {
+        fprintf(stderr, "usage: autocount_main auto|adaptive|exact JOINTS FORCES STEPS [sqrt|phi]\n");
         return 2;
     }
     mode = argv[1];
@@ -59,12 +60,13 @@ int main(int argc, char **argv)
     nf = atoi(argv[3]);
     steps = atoi(argv[4]);
     if ((strcmp(mode, "auto") && strcmp(mode, "adaptive") && strcmp(mode, "exact")) || joints < 1 ||
-        nf < 1 || nf > joints || steps < 1) {
+        nf < 1 || nf > joints || steps < 1 || (strcmp(form, "sqrt") && strcmp(form, "phi"))) {
         fprintf(stderr, "autocount_main: bad arguments\n");
         return 2;
     }
-    if (aqs_linkage_create(&L) != AQS_OK || bench_build_molecule(L, joints, BENCH_MOLECULE_SEED) != AQS_OK ||
-        aqs_linkage_finalize(L) != AQS_OK) {
+    if (aqs_linkage_create(&L) != AQS_OK ||
+        aqs_linkage_set_dca_form(L, strcmp(form, "phi") ? AQS_DCA_FORM_SQRT : AQS_DCA_FORM_PHI) != AQS_OK ||
+        bench_build_molecule(L, joints, BENCH_MOLECULE_SEED) != AQS_OK || aqs_linkage_finalize(L) != AQS_OK) {
         fprintf(stderr, "autocount_main: building: %s\n", L ? aqs_linkage_last_error(L) : "");
         return 1;
     }
@@ -99,8 +101,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "autocount_main: %s\n", aqs_linkage_last_error(L));
         return 1;
     }
-    printf("{\"mode\":\"%s\",\"joints\":%d,\"forces\":%d,\"steps\":%d,\"exact_steps\":%d,\"mean_ne\":%.1f}\n", mode,
-           (int)joints, (int)nf, (int)steps, exact_steps, mean_ne);
+    printf("{\"mode\":\"%s\",\"form\":\"%s\",\"joints\":%d,\"forces\":%d,\"steps\":%d,\"exact_steps\":%d,"
+           "\"mean_ne\":%.1f}\n",
+           mode, form, (int)joints, (int)nf, (int)steps, exact_steps, mean_ne);
     aqs_linkage_destroy(L);
     return 0;
 }

@@ -157,24 +157,57 @@ static int mp_factor(const double *mp, double Jc[9], double *sm)
     return 0;
 }
 
+/* N = -S^T Jc (S = skew(c)) as mp_y sums it, k = 0, 1, 2 from 0.0, less
+ * the products with S's zero diagonal (which subtract an exact zero from a
+ * sum that is never -0: the same N, bit for bit). */
+static inline void mp_n(const double Jc[9], const double *c, double N[9])
+{
+    int j;
+    for (j = 0; j < 3; j++) {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        s0 -= c[2] * Jc[3 + j];  /* S[3] = c2 */
+        s0 -= -c[1] * Jc[6 + j]; /* S[6] = -c1 */
+        s1 -= -c[2] * Jc[j];     /* S[1] = -c2 */
+        s1 -= c[0] * Jc[6 + j];  /* S[7] = c0 */
+        s2 -= c[1] * Jc[j];      /* S[2] = c1 */
+        s2 -= -c[0] * Jc[3 + j]; /* S[5] = -c0 */
+        N[j] = s0;
+        N[3 + j] = s1;
+        N[6 + j] = s2;
+    }
+}
+
 /* Y (6x6) = [Jc 0; -S^T Jc  sm 1], S = skew(c): I^-1 = Y Y^T for the mass
  * properties of mp_factor with their centre of mass at c. */
 static void mp_y(const double Jc[9], double sm, const double *c, double *Y)
 {
-    double S[9];
-    int i, j, k;
-    S[0] = 0.0; S[1] = -c[2]; S[2] = c[1];
-    S[3] = c[2]; S[4] = 0.0; S[5] = -c[0];
-    S[6] = -c[1]; S[7] = c[0]; S[8] = 0.0;
+    double N[9];
+    int i, j;
+    mp_n(Jc, c, N);
     memset(Y, 0, 36 * sizeof(double));
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++) {
-            double s = 0.0;
             Y[6 * i + j] = Jc[3 * i + j];
-            for (k = 0; k < 3; k++) s -= S[3 * k + i] * Jc[3 * k + j]; /* -S^T Jc */
-            Y[6 * (3 + i) + j] = s;
+            Y[6 * (3 + i) + j] = N[3 * i + j]; /* -S^T Jc */
         }
     for (i = 0; i < 3; i++) Y[6 * (3 + i) + 3 + i] = sm;
+}
+
+/* The squared Frobenius norm of mp_y's Y, summed in the same order (row by
+ * row) with the same entries: Y's zero entries, left out, add exact zeros
+ * (the sum starts at +0.0 and holds squares), so the sum is bit for bit that
+ * over the 36 entries of mp_y's Y. */
+static double mp_y_norm2(const double Jc[9], double sm, const double *c)
+{
+    double w = 0.0, N[9];
+    int i, j;
+    mp_n(Jc, c, N);
+    for (i = 0; i < 9; i++) w += Jc[i] * Jc[i];
+    for (i = 0; i < 3; i++) {
+        for (j = 0; j < 3; j++) w += N[3 * i + j] * N[3 * i + j];
+        w += sm * sm;
+    }
+    return w;
 }
 
 /* Y (6x6) with I^-1 = Y Y^T: Y = [Jc 0; -S^T Jc  1/sqrt(m)], S = skew(c),
@@ -284,8 +317,32 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
 #ifdef DCA_SSE2
     __m128d vd[DCA_VDUP];
 #endif
-    for (j = 1; j < m; j++)
-        if (fabs(x[j]) > scale) scale = fabs(x[j]);
+    /* the copy v = x and its sum of squares (in column order from 0.0, as
+     * below) in the same pass as the scale */
+    v[0] = x[0];
+    ss = x[0] * x[0];
+    j = 1;
+#ifdef DCA_SSE2
+    { /* two entries at a time: the squares added in column order, the largest
+         magnitude by maxpd (order-free; a NaN entry is skipped, as below) */
+        const __m128d ab = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+        __m128d mx = _mm_setzero_pd();
+        for (; j + 1 < m; j += 2) {
+            const __m128d y = _mm_loadu_pd(x + j), y2 = _mm_mul_pd(y, y);
+            _mm_storeu_pd(v + j, y);
+            ss += _mm_cvtsd_f64(y2);
+            ss += _mm_cvtsd_f64(_mm_unpackhi_pd(y2, y2));
+            mx = _mm_max_pd(_mm_and_pd(y, ab), mx);
+        }
+        scale = _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(mx, mx), mx));
+    }
+#endif
+    for (; j < m; j++) {
+        const double y = x[j];
+        v[j] = y;
+        ss += y * y;
+        if (fabs(y) > scale) scale = fabs(y);
+    }
     if (scale == 0.0) return; /* nothing right of the pivot */
     if (fabs(x[0]) > scale) scale = fabs(x[0]);
     /* v = x / scale - alpha e1 (the direction is all that H = 1 - 2 v v^T / v^T v
@@ -293,14 +350,11 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
      * entries underflow or overflow in alpha v0. A power-of-two scale changes
      * every later quantity by an exact power of two, and the reflected rows not
      * at all, so between 2^-100 and 2^100, where nothing can underflow or
-     * overflow, it is left out: the same results, bit for bit. */
-    if (scale >= 0x1p-100 && scale <= 0x1p100) {
-        for (j = 0; j < m; j++) {
-            v[j] = x[j];
-            ss += v[j] * v[j];
-        }
-    } else {
+     * overflow, it is left out: the same results, bit for bit (v and ss are
+     * then the ones computed above). */
+    if (!(scale >= 0x1p-100 && scale <= 0x1p100)) {
         int e;
+        ss = 0.0;
         frexp(scale, &e);
         scale = ldexp(1.0, e); /* a power of two: x / scale is exact */
         for (j = 0; j < m; j++) {
@@ -316,11 +370,54 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
     if (m <= DCA_VDUP)
         for (j = 0; j < m; j++) vd[j] = _mm_set1_pd(v[j]);
 #endif
-    for (i = r0; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
+    i = r0;
+#ifdef DCA_SSE2
+    if (m <= DCA_VDUP) { /* the loop below with its sums, products by f and zero tests in registers */
+        const __m128d ff = _mm_set1_pd(f), zero = _mm_setzero_pd();
+        for (; i + 3 < nrows; i += 4) {
+            double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+            __m128d st = zero, uz = zero;
+            for (j = 0; j < m; j++) {
+                st = _mm_add_pd(st, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), vd[j]));
+                uz = _mm_add_pd(uz, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(g + j), h + j), vd[j]));
+            }
+            st = _mm_mul_pd(st, ff);
+            uz = _mm_mul_pd(uz, ff);
+            if ((_mm_movemask_pd(_mm_cmpeq_pd(st, zero)) | _mm_movemask_pd(_mm_cmpeq_pd(uz, zero))) == 0) {
+                const __m128d sa = _mm_unpacklo_pd(st, st), tt = _mm_unpackhi_pd(st, st);
+                const __m128d uu = _mm_unpacklo_pd(uz, uz), zz = _mm_unpackhi_pd(uz, uz);
+                for (j = 0; j + 1 < m; j += 2) {
+                    const __m128d vv = _mm_loadu_pd(v + j);
+                    _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(sa, vv)));
+                    _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(tt, vv)));
+                    _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(uu, vv)));
+                    _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(zz, vv)));
+                }
+                if (j < m) {
+                    _mm_store_sd(a + j, _mm_sub_sd(_mm_load_sd(a + j), _mm_mul_sd(sa, vd[j])));
+                    _mm_store_sd(b + j, _mm_sub_sd(_mm_load_sd(b + j), _mm_mul_sd(tt, vd[j])));
+                    _mm_store_sd(g + j, _mm_sub_sd(_mm_load_sd(g + j), _mm_mul_sd(uu, vd[j])));
+                    _mm_store_sd(h + j, _mm_sub_sd(_mm_load_sd(h + j), _mm_mul_sd(zz, vd[j])));
+                }
+            } else {
+                double s, t, u, z;
+                _mm_storel_pd(&s, st);
+                _mm_storeh_pd(&t, st);
+                _mm_storel_pd(&u, uz);
+                _mm_storeh_pd(&z, uz);
+                if (s != 0.0) axpy1(a, s, v, m);
+                if (t != 0.0) axpy1(b, t, v, m);
+                if (u != 0.0) axpy1(g, u, v, m);
+                if (z != 0.0) axpy1(h, z, v, m);
+            }
+        }
+    }
+#endif
+    for (; i + 3 < nrows; i += 4) { /* four rows at a time, each as alone */
         double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
         double s, t, u, z;
-        DOT2(a, b, &s, &t);
-        DOT2(g, h, &u, &z);
+        dot2(a, b, v, m, &s, &t); /* (with SSE2: only past DCA_VDUP columns) */
+        dot2(g, h, v, m, &u, &z);
         s *= f;
         t *= f;
         u *= f;
@@ -504,22 +601,50 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     const int32_t c = 6 - d, orows = 6 * C->nh;
     double E[36], U[36], G2[36], Eb[6], gw[6];
     int32_t i, j, k, r, o;
-    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column */
+    /* E = Lc^-1 Tc^T (c x 6), forward substitution per column; -1 if a pivot
+     * is zero or not finite, or an entry before its division is not finite */
+    for (i = 0; i < c; i++)
+        if (!(fabs(Lc[(int64_t)i * ncol + i]) > 0.0)) return -1;
+#ifdef DCA_SSE2
+    { /* two columns at a time, each lane as below; x * 0 is NaN only for x not finite */
+        __m128d bad = _mm_setzero_pd();
+        for (j = 0; j < 6; j += 2)
+            for (i = 0; i < c; i++) {
+                __m128d x = _mm_loadh_pd(_mm_load_sd(Tc + 6 * j + i), Tc + 6 * (j + 1) + i);
+                for (k = 0; k < i; k++)
+                    x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Lc[(int64_t)i * ncol + k]), _mm_loadu_pd(E + 6 * k + j)));
+                bad = _mm_add_pd(bad, _mm_mul_pd(x, _mm_setzero_pd()));
+                _mm_storeu_pd(E + 6 * i + j, _mm_div_pd(x, _mm_set1_pd(Lc[(int64_t)i * ncol + i])));
+            }
+        if (_mm_movemask_pd(_mm_cmpunord_pd(bad, bad)) != 0) return -1;
+    }
+#else
     for (j = 0; j < 6; j++)
         for (i = 0; i < c; i++) {
             double x = Tc[6 * j + i];
             double piv = Lc[(int64_t)i * ncol + i];
             for (k = 0; k < i; k++) x -= Lc[(int64_t)i * ncol + k] * E[6 * k + j];
-            if (!(fabs(piv) > 0.0) || !isfinite(x)) return -1;
+            if (!isfinite(x)) return -1;
             E[6 * i + j] = x / piv;
         }
+#endif
     /* U = Sd^T - Kp1 E */
+#ifdef DCA_SSE2
+    for (r = 0; r < d; r++) /* two entries of U's row at a time, each sum as below */
+        for (j = 0; j < 6; j += 2) {
+            __m128d x = _mm_loadh_pd(_mm_load_sd(Sd + j * d + r), Sd + (j + 1) * d + r);
+            for (k = 0; k < c; k++)
+                x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Kp[(int64_t)r * ncol + k]), _mm_loadu_pd(E + 6 * k + j)));
+            _mm_storeu_pd(U + 6 * r + j, x);
+        }
+#else
     for (r = 0; r < d; r++)
         for (j = 0; j < 6; j++) {
             double x = Sd[j * d + r];
             for (k = 0; k < c; k++) x -= Kp[(int64_t)r * ncol + k] * E[6 * k + j];
             U[6 * r + j] = x;
         }
+#endif
     for (k = 0; k < c; k++) {
         double x = 0.0;
         for (j = 0; j < 6; j++) x += E[6 * k + j] * beta[j];
@@ -539,32 +664,52 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         kq[k - c] = x;
     }
     /* per outer row: FX = -E^T X1^T, QX = -Kp2 X2^T, b_C = b_o + X1 E beta + X2 Kp2^T Q */
-    for (o = 0; o < orows; o++) {
-        const double *x1 = X + (int64_t)o * ncol;
-        double sb = bo[o];
 #ifdef DCA_SSE2
-        { /* E's rows two entries at a time: each FX entry's sum as below, lane by lane */
+    /* two outer rows at a time (orows is a multiple of 6): E's rows two
+     * entries at a time for FX, the two rows' b_C and QX sums in the two
+     * lanes; every sum as in the scalar loops below, lane by lane */
+    for (o = 0; o < orows; o += 2) {
+        const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol;
+        __m128d sb = _mm_loadu_pd(bo + o);
+        int32_t h;
+        for (h = 0; h < 2; h++) {
+            const double *xr = h ? x2 : x1;
             __m128d f0 = _mm_setzero_pd(), f1 = f0, f2 = f0;
             for (k = 0; k < c; k++) {
-                const __m128d xk = _mm_set1_pd(x1[k]);
+                const __m128d xk = _mm_set1_pd(xr[k]);
                 f0 = _mm_sub_pd(f0, _mm_mul_pd(_mm_loadu_pd(E + 6 * k), xk));
                 f1 = _mm_sub_pd(f1, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 2), xk));
                 f2 = _mm_sub_pd(f2, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 4), xk));
             }
-            _mm_storel_pd(FX + o, f0);
-            _mm_storeh_pd(FX + orows + o, f0);
-            _mm_storel_pd(FX + (int64_t)2 * orows + o, f1);
-            _mm_storeh_pd(FX + (int64_t)3 * orows + o, f1);
-            _mm_storel_pd(FX + (int64_t)4 * orows + o, f2);
-            _mm_storeh_pd(FX + (int64_t)5 * orows + o, f2);
+            _mm_storel_pd(FX + o + h, f0);
+            _mm_storeh_pd(FX + orows + o + h, f0);
+            _mm_storel_pd(FX + (int64_t)2 * orows + o + h, f1);
+            _mm_storeh_pd(FX + (int64_t)3 * orows + o + h, f1);
+            _mm_storel_pd(FX + (int64_t)4 * orows + o + h, f2);
+            _mm_storeh_pd(FX + (int64_t)5 * orows + o + h, f2);
         }
+        for (k = 0; k < c; k++)
+            sb = _mm_add_pd(sb, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k), _mm_set1_pd(Eb[k])));
+        for (k = c; k < w; k++)
+            sb = _mm_add_pd(sb, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k), _mm_set1_pd(kq[k - c])));
+        _mm_storeu_pd(bC + o, sb);
+        for (r = 0; r < d; r++) {
+            const double *kr = Kp + (int64_t)r * ncol;
+            __m128d x = _mm_setzero_pd();
+            for (k = c; k < w; k++)
+                x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(kr[k]), _mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k)));
+            _mm_storeu_pd(QX + (int64_t)r * orows + o, x);
+        }
+    }
 #else
+    for (o = 0; o < orows; o++) {
+        const double *x1 = X + (int64_t)o * ncol;
+        double sb = bo[o];
         for (i = 0; i < 6; i++) {
             double x = 0.0;
             for (k = 0; k < c; k++) x -= E[6 * k + i] * x1[k];
             FX[(int64_t)i * orows + o] = x;
         }
-#endif
         for (k = 0; k < c; k++) sb += x1[k] * Eb[k];
         for (k = c; k < w; k++) sb += x1[k] * kq[k - c];
         bC[o] = sb;
@@ -575,6 +720,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
             QX[(int64_t)r * orows + o] = x;
         }
     }
+#endif
     for (r = 0; r < d; r++) {
         double x = 0.0;
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
@@ -582,12 +728,21 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         rho[r] = x;
         if (!isfinite(x)) return -1;
     }
+#ifdef DCA_SSE2
+    for (i = 0; i < 6; i += 2) { /* two entries at a time, each sum as below */
+        __m128d x = _mm_setzero_pd();
+        for (k = 0; k < c; k++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + i), _mm_set1_pd(Eb[k])));
+        for (r = 0; r < d; r++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(U + 6 * r + i), _mm_set1_pd(Q[r])));
+        _mm_storeu_pd(gw + i, x);
+    }
+#else
     for (i = 0; i < 6; i++) {
         double x = 0.0;
         for (k = 0; k < c; k++) x += E[6 * k + i] * Eb[k];
         for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
         gw[i] = x;
     }
+#endif
     memcpy(gamma, gw, sizeof gw);
     rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, ncol, 0.0, bo);
     return 0;
@@ -897,13 +1052,11 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double sA = 0.0, sB = 0.0, wa = -1.0, wb = -1.0;
         if (!A->grounded) {
             if (mp_factor(IA, JA, &sA) != 0) return -1;
-            mp_y(JA, sA, IA + 1, YA);
-            for (wa = 0.0, i = 0; i < 36; i++) wa += YA[i] * YA[i];
+            wa = mp_y_norm2(JA, sA, IA + 1);
         }
         if (!B->grounded) {
             if (mp_factor(IB, JB, &sB) != 0) return -1;
-            mp_y(JB, sB, IB + 1, YB);
-            for (wb = 0.0, i = 0; i < 36; i++) wb += YB[i] * YB[i];
+            wb = mp_y_norm2(JB, sB, IB + 1);
         }
         if (rA == 0 && rB == 0 && !A->grounded && !B->grounded && nh >= 1 && rigid_join_wanted(IA, IB, JA, JB))
             return 1; /* the caller takes rigid_join */
@@ -957,11 +1110,20 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         { /* the same, A's sums in the low lanes and B's in the high ones */
             __m128d W[36], Y2[36];
             for (i = 0; i < 36; i++) Y2[i] = _mm_loadh_pd(_mm_load_sd(YA + i), YB + i);
-            for (j = 0; j < 6; j++)
-                for (i = j < 3 ? 0 : 3; i < 6; i++) {
+            __m128d Lb[36];
+            for (i = 0; i < 6; i++) /* Lm broadcast once (its lower triangle) */
+                for (r = 0; r <= i; r++) Lb[6 * i + r] = _mm_set1_pd(Lm[6 * i + r]);
+            for (j = 0; j < 3; j++)
+                for (i = 0; i < 6; i++) {
                     __m128d x = Y2[6 * i + j];
-                    for (r = j < 3 ? 0 : 3; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(_mm_set1_pd(Lm[6 * i + r]), W[6 * r + j]));
-                    W[6 * i + j] = _mm_div_pd(x, _mm_set1_pd(Lm[7 * i]));
+                    for (r = 0; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(Lb[6 * i + r], W[6 * r + j]));
+                    W[6 * i + j] = _mm_div_pd(x, Lb[7 * i]);
+                }
+            for (j = 3; j < 6; j++)
+                for (i = 3; i < 6; i++) {
+                    __m128d x = Y2[6 * i + j];
+                    for (r = 3; r < i; r++) x = _mm_sub_pd(x, _mm_mul_pd(Lb[6 * i + r], W[6 * r + j]));
+                    W[6 * i + j] = _mm_div_pd(x, Lb[7 * i]);
                 }
             for (i = 0; i < 6; i++)
                 for (j = 0; j < 6; j++) {
@@ -1057,13 +1219,17 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 for (r = 0; r < 6; r++) x += S[r * d + i] * S[r * d + j];
                 StS[d * i + j] = x;
             }
-        if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
-        for (i = 0; i < 6; i++)
-            for (j = 0; j < d; j++) {
-                double x = 0.0;
-                for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
-                Sd[i * d + j] = x;
-            }
+        if (d == 1 && StS[0] == 1.0) { /* a unit axis: (S^T S)^-1 = 1 exactly, as dense_spd_inverse gives it */
+            for (i = 0; i < 6; i++) Sd[i] = 0.0 + S[i];
+        } else {
+            if (dense_spd_inverse(StS, StSi, d) != 0) return -1;
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < d; j++) {
+                    double x = 0.0;
+                    for (r = 0; r < d; r++) x += S[i * d + r] * StSi[d * r + j];
+                    Sd[i * d + j] = x;
+                }
+        }
     }
     /* In place, column by column: the c constraint rows Tc^T L_k, then the d
      * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
@@ -1084,6 +1250,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         j = 0;
 #ifdef DCA_SSE2
+        if (nz[0] == 1 && nz[1] == 1 && nz[2] == 1 && nz[3] == 1 && nz[4] == 1 && nz[5] == 1) {
+            /* an axis-aligned S (each new row one weighted row): the loop below
+             * with its weights kept broadcast and its sums of one term written out */
+            __m128d wq[6];
+            const __m128d zero = _mm_setzero_pd();
+            for (q = 0; q < 6; q++) wq[q] = _mm_set1_pd(wt[6 * q]);
+            for (; j + 1 < w; j += 2) {
+                __m128d col[6];
+                for (r = 0; r < 6; r++) col[r] = _mm_loadu_pd(rel + ncol * r + j);
+                for (q = 0; q < 6; q++) _mm_storeu_pd(rel + ncol * q + j, _mm_add_pd(zero, _mm_mul_pd(wq[q], col[ix[6 * q]])));
+            }
+        }
         for (; j + 1 < w; j += 2) { /* two columns at a time, each sum as below */
             __m128d col[6];
             for (r = 0; r < 6; r++) col[r] = _mm_loadu_pd(rel + ncol * r + j);

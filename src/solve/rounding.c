@@ -33,6 +33,11 @@
 
 #include "worldbound.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define RND_SSE2 1
+#endif
+
 /* A node's levels in tree.rnd_node (5 per node). */
 enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
 #define RN(t, nd) ((t)->rnd_node + 5 * ((nd) - (t)->nodes))
@@ -136,12 +141,29 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
             for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
             eb[k] = a;
         }
+#ifdef RND_SSE2
+        { /* two j at a time, each sum as below; sgam summed in j's order */
+            const __m128d ab = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL)); /* fabs */
+            for (j = 0; j < 6; j += 2) {
+                __m128d a = _mm_setzero_pd();
+                double a2[2];
+                for (k = 0; k < c; k++)
+                    a = _mm_add_pd(a, _mm_mul_pd(_mm_and_pd(_mm_loadu_pd(E + 6 * k + j), ab), _mm_set1_pd(eb[k])));
+                for (i = 0; i < d; i++)
+                    a = _mm_add_pd(a, _mm_and_pd(_mm_mul_pd(_mm_loadu_pd(U + 6 * i + j), _mm_set1_pd(Q[i])), ab));
+                _mm_storeu_pd(a2, a);
+                sgam += a2[0] * a2[0];
+                sgam += a2[1] * a2[1];
+            }
+        }
+#else
         for (j = 0; j < 6; j++) {
             double a = 0.0;
             for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
             for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
             sgam += a * a;
         }
+#endif
     } else { /* the rigid join: W itself */
         for (j = 0; j < 6; j++) {
             double a = 0.0;
