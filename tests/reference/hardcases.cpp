@@ -119,7 +119,12 @@ struct KnownBad {
 // computed joints are not refined: their entries stay). These do not reach 10x the ABA yet
 // (and the adaptive "true <= bound + 10x ABA" fails with them):
 const KnownBad kKnownBad[] = {
-    {"altmass/r=1e+09/", true, true, "mass ratio 1e9: refined DCA 1e-12 .. 2e-10 at 100 links, none gained at 1000"},
+    // Long mode: 10^4 links (GMRES's 20 Krylov steps are not enough there: docs/math.md
+    // §13a). First, since the first matching prefix decides.
+    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+09/n=10000", true, true, "mass ratio 1e9 at 10^4 links: GMRES-IR not converged in 20 steps"},
+    {"altmass/r=1e+09/", false, true, "adaptive: mass ratio 1e9 (the refined DCA passes since GMRES-IR)"},
     {"altmass/r=1e+03/n=1000", false, false, "passes (asserted)"},
     {"altmass/", false, true, "mass ratio: adaptive solves carry the unrefined DCA's ~1e-16 x ratio"},
     {"near_eq/", false, true, "adaptive: the unrefined DCA's 40-80x the ABA's error"},
@@ -130,9 +135,6 @@ const KnownBad kKnownBad[] = {
     // Long mode: the straight chain under gravity at 10^6 links, 1.4e-12 (the ABA 1.3e-16;
     // 5e-16 at 10^5, and the same chain under a tip force 1.9e-16 at 10^6).
     {"chain/straight/g/n=1000000", true, true, "DCA 1.4e-12 at 10^6 links under gravity"},
-    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+09/n=10000", true, true, "mass ratio"},
 };
 // The inverse-inertia form (AQS_DCA_FORM_PHI), measured on main at 90aa04b, when it was the
 // only form.
