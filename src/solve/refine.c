@@ -176,14 +176,33 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
     const size_t snv = (size_t)nv + 1;
     double h[KRYLOV_MAX + 1][KRYLOV_MAX], cs[KRYLOV_MAX], sn[KRYLOV_MAX], g[KRYLOV_MAX + 1], y[KRYLOV_MAX];
     int32_t i, j, l, k = 0;
-    for (i = 0; i < nv; i++) R->v[i] = R->r[i] / rn;
     g[0] = rn;
     for (j = 0; j < KRYLOV_MAX; j++) {
         double *vj = R->v + (size_t)j * snv, *w = R->v + (size_t)(j + 1) * snv, *zj = R->z + (size_t)j * snv;
         double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
         int rep;
-        if (correction(L, vj) != 0) break;
-        memcpy(zj, R->dq, sizeof(double) * (size_t)nv);
+        if (j == 0) {
+            /* the plain correction P r first: where it is resolved, it is
+             * the answer (plain refinement, bit for bit, no Arnoldi step) */
+            if (correction(L, R->r) != 0) break;
+            for (i = 0; i < nv; i++) {
+                R->q1[i] = L->qdd[i] + R->dq[i];
+                dmax = fmax(dmax, fabs(R->dq[i]));
+                qmax = fmax(qmax, fabs(R->q1[i]));
+            }
+            if (resolved(dmax, qmax, 0)) {
+                *done = 1;
+                return 1;
+            }
+            dmax = qmax = 0.0;
+            for (i = 0; i < nv; i++) {
+                vj[i] = R->r[i] / rn;
+                zj[i] = R->dq[i] / rn;
+            }
+        } else {
+            if (correction(L, vj) != 0) break;
+            memcpy(zj, R->dq, sizeof(double) * (size_t)nv);
+        }
         residual_mass_mul(L, zj, w);
         for (l = 0; l <= j; l++) h[l][j] = 0.0;
         for (rep = 0; rep < 2; rep++) /* Gram-Schmidt, twice */
