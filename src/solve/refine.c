@@ -83,13 +83,28 @@ static aqs_status refine_alloc(aqs_linkage *L)
     R->dq = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
     R->q1 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
     R->df = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->njoints + 1, sizeof(double));
-    R->v = lk_calloc_in(L, LK_MEM_DCA, (KRYLOV_MAX + 1) * nv, sizeof(double));
-    R->z = lk_calloc_in(L, LK_MEM_DCA, KRYLOV_MAX * nv, sizeof(double));
-    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->df || !R->v || !R->z) {
+    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->df) {
         refine_free(L);
         return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
     }
     return AQS_OK;
+}
+
+/* The Krylov basis, at the first solve whose first correction is not
+ * resolved (benign linkages never hold it). Returns 0, or -1 when out of
+ * memory: that cycle is then the plain correction alone. */
+static int krylov_alloc(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    const size_t nv = (size_t)L->nv + 1;
+    if (R->v) return 0;
+    R->v = lk_calloc_in(L, LK_MEM_DCA, (KRYLOV_MAX + 1) * nv, sizeof(double));
+    R->z = lk_calloc_in(L, LK_MEM_DCA, KRYLOV_MAX * nv, sizeof(double));
+    if (R->v && R->z) return 0;
+    lk_free(L, R->v);
+    lk_free(L, R->z);
+    R->v = R->z = NULL;
+    return -1;
 }
 
 /* The load-dependent node values into R->save (dir 0) or back (dir 1). */
@@ -183,18 +198,22 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
         int rep;
         if (j == 0) {
             /* the plain correction P r first: where it is resolved, it is
-             * the answer (plain refinement, bit for bit, no Arnoldi step) */
+             * the answer (plain refinement, bit for bit, no Arnoldi step;
+             * also when the basis cannot be allocated) */
             if (correction(L, R->r) != 0) break;
             for (i = 0; i < nv; i++) {
                 R->q1[i] = L->qdd[i] + R->dq[i];
                 dmax = fmax(dmax, fabs(R->dq[i]));
                 qmax = fmax(qmax, fabs(R->q1[i]));
             }
-            if (resolved(dmax, qmax, 0)) {
+            if (resolved(dmax, qmax, 0) || krylov_alloc(L) != 0) {
                 *done = 1;
                 return 1;
             }
             dmax = qmax = 0.0;
+            vj = R->v; /* allocated now */
+            w = R->v + snv;
+            zj = R->z;
             for (i = 0; i < nv; i++) {
                 vj[i] = R->r[i] / rn;
                 zj[i] = R->dq[i] / rn;
