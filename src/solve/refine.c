@@ -7,8 +7,12 @@
  *     qdd <- qdd + DCA^-1(r)     (the same node coefficients, r the only
  *                                 load: no gravity, no external force)
  * Each correction multiplies the error by about the DCA's own relative error
- * level (< 1), until the residual's rounding limits it, which is what the
- * backward-stable articulated-body solve sees too.
+ * level where that is < 1, until the residual's rounding limits it, which is
+ * what the backward-stable articulated-body solve sees too. Where it is not
+ * (mass ratios 1e9: DCA^-1 M is off by O(1) in a few directions), plain
+ * refinement diverges; so the corrections are the steps of GMRES on
+ * M dq = r right-preconditioned by DCA^-1 (GMRES-IR, Carson & Higham 2018),
+ * whose first step is the plain correction, taken as it is when resolved.
  *
  * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
  * out bit for bit the same, the positions being unchanged; rho, gamma and b

@@ -12,8 +12,11 @@
  * articulated-body solve's own answer is at the rounding level (tests/
  * test_refine.c). In working precision: a residual in double-double was
  * measured to buy nothing refinement could use, at 7x the cost (docs/math.md
- * §13a). Scratch: the articulated-body solver's per-solve node values (X, and
- * v.s for a_c and f_c), which every solve that reads them rewrites first. */
+ * §13a). The same pass at zero gravity, no load and no joint force is the
+ * product M v by the joint-space inertia matrix (residual_mass_mul, the
+ * operator of the refinement's GMRES). Scratch: the articulated-body
+ * solver's per-solve node values (X, and v.s for a_c and f_c), which every
+ * solve that reads them rewrites first. */
 #include "residual.h"
 
 #include <math.h>

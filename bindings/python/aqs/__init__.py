@@ -992,9 +992,10 @@ class Linkage:
         return EXACT_SOLVER_NAMES[value.value]
 
     def set_exact_refinement(self, max_corrections):
-        """At most max_corrections (0 .. 3, default 3; 0: off) corrections
-        of an exact DCA solve by the DCA itself with the inverse-dynamics
-        residual as the load, each kept only when it lowers the residual
+        """At most max_corrections (0 .. 3, default 3; 0: off) refinement
+        cycles of an exact DCA solve: GMRES preconditioned by the DCA itself
+        with the inverse-dynamics residual as the load, its first step the
+        plain correction, each cycle kept only when it lowers the residual
         (aqs_linkage_set_exact_refinement, docs/math.md 13a). Any phase."""
         self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
 
