@@ -865,12 +865,16 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  solve that computes every joint through the DCA's back-substitution
  *  (AQS_EXACT_DCA, eps = 0 without a cap, or an adaptive solve that ended
  *  up computing every joint: error_bound 0), at most max_corrections
- *  corrections qdd += DCA^-1(Q - ID(qdd)), each kept only when it is finite
- *  and lowers the inverse-dynamics residual; the constraint forces are then
- *  those of the refined accelerations. Each costs about one more pass over
- *  the tree's nodes. max_corrections: 0 (off: the DCA's back-substitution as
- *  it is, the paper's exact solver) to AQS_REFINEMENT_MAX; default
- *  AQS_REFINEMENT_MAX. Any phase; takes effect at the next solve.
+ *  GMRES cycles on M dq = Q - ID(qdd) preconditioned by the DCA itself,
+ *  each kept only when its answer is finite and lowers the inverse-dynamics
+ *  residual; the constraint forces are then those of the refined
+ *  accelerations. A cycle's first step is the plain correction
+ *  qdd += DCA^-1(Q - ID(qdd)), about one more pass over the tree's nodes,
+ *  and where it is resolved (the usual case) the cycle ends there; otherwise
+ *  up to 20 steps of one such pass each. max_corrections: 0 (off: the DCA's
+ *  back-substitution as it is, the paper's exact solver) to
+ *  AQS_REFINEMENT_MAX; default AQS_REFINEMENT_MAX. Any phase; takes effect
+ *  at the next solve.
  *  Returns AQS_OK, AQS_EINVAL (nothing changed). */
 #define AQS_REFINEMENT_MAX 3
 AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *linkage, int32_t max_corrections);

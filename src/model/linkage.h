@@ -214,7 +214,7 @@ typedef struct {
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
     int certified;          /* aqs_solve_stats.certified */
-    int32_t refined;        /* corrections the last exact DCA solve kept (src/solve/refine.c) */
+    int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/solve/aba.c). Its data

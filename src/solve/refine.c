@@ -7,8 +7,12 @@
  *     qdd <- qdd + DCA^-1(r)     (the same node coefficients, r the only
  *                                 load: no gravity, no external force)
  * Each correction multiplies the error by about the DCA's own relative error
- * level (< 1), until the residual's rounding limits it, which is what the
- * backward-stable articulated-body solve sees too.
+ * level where that is < 1, until the residual's rounding limits it, which is
+ * what the backward-stable articulated-body solve sees too. Where it is not
+ * (mass ratios 1e9: DCA^-1 M is off by O(1) in a few directions), plain
+ * refinement diverges; so the corrections are the steps of GMRES on
+ * M dq = r right-preconditioned by DCA^-1 (GMRES-IR, Carson & Higham 2018),
+ * whose first step is the plain correction, taken as it is when resolved.
  *
  * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
  * out bit for bit the same, the positions being unchanged; rho, gamma and b
@@ -24,10 +28,17 @@
 #include "dca.h"
 #include "residual.h"
 
-/* The size of a correction (units of u, relative) after which no further one
- * is tried (resolved below); at most L->refine_max corrections
- * (aqs_linkage_set_exact_refinement). */
+/* The size of a step (units of u, relative) after which no further one is
+ * tried (resolved below): REFINE_LEVEL for a cycle's first step (the plain
+ * correction's level, where one correction converges), REFINE_LEVEL_LATER
+ * for the next ones (GMRES's late steps contract the error by 0.03 .. 0.4
+ * each, measured, not by the DCA's relative error level). At most
+ * L->refine_max cycles (aqs_linkage_set_exact_refinement). */
 #define REFINE_LEVEL 1024.0
+#define REFINE_LEVEL_LATER 64.0
+/* Krylov steps of one GMRES cycle at most (each one correction solve, one
+ * node pass): altmass r = 1e9 at 1000 links takes 18. */
+#define KRYLOV_MAX 20
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -36,6 +47,8 @@ struct refine {
     double *dq;     /* nv: the correction */
     double *q1;     /* nv: the candidate */
     double *df;     /* 6 njoints: the correction's joint forces (not used after) */
+    double *v;      /* (KRYLOV_MAX + 1) nv: the Krylov basis of M P (orthonormal) */
+    double *z;      /* KRYLOV_MAX nv: P v_j, the preconditioned directions */
 };
 
 void refine_free(aqs_linkage *L)
@@ -48,6 +61,8 @@ void refine_free(aqs_linkage *L)
     lk_free(L, R->dq);
     lk_free(L, R->q1);
     lk_free(L, R->df);
+    lk_free(L, R->v);
+    lk_free(L, R->z);
     lk_free(L, R);
     L->rf = NULL;
 }
@@ -77,6 +92,23 @@ static aqs_status refine_alloc(aqs_linkage *L)
         return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
     }
     return AQS_OK;
+}
+
+/* The Krylov basis, at the first solve whose first correction is not
+ * resolved (benign linkages never hold it). Returns 0, or -1 when out of
+ * memory: that cycle is then the plain correction alone. */
+static int krylov_alloc(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    const size_t nv = (size_t)L->nv + 1;
+    if (R->v) return 0;
+    R->v = lk_calloc_in(L, LK_MEM_DCA, (KRYLOV_MAX + 1) * nv, sizeof(double));
+    R->z = lk_calloc_in(L, LK_MEM_DCA, KRYLOV_MAX * nv, sizeof(double));
+    if (R->v && R->z) return 0;
+    lk_free(L, R->v);
+    lk_free(L, R->z);
+    R->v = R->z = NULL;
+    return -1;
 }
 
 /* The load-dependent node values into R->save (dir 0) or back (dir 1). */
@@ -136,28 +168,120 @@ static int correction(aqs_linkage *L, double *r)
     return 0;
 }
 
-/* No further correction is worth a node pass: the last one was at most
- * REFINE_LEVEL u ||q1|| (max norms). Each correction multiplies the error by
- * about the DCA's relative error level on that load, so the next one would be
- * that much smaller again: at the rounding level, where the random trees'
- * first correction (4e2 .. 7e2 u) already leaves them. */
-static int resolved(const double *dq, const double *q1, int32_t nv)
+/* No further Krylov step is worth a node pass: the last one moved the
+ * iterate by at most REFINE_LEVEL u ||q1|| (max norms). Each step multiplies
+ * the error by about the DCA's relative error level on that load where it
+ * is below 1, so the next one would be that much smaller again: at the
+ * rounding level, where the random trees' first step (4e2 .. 7e2 u) already
+ * leaves them. */
+static int resolved(double dmax, double qmax, int32_t step)
 {
     const double u = 1.1102230246251565e-16;
-    double qmax = 0.0, dmax = 0.0;
-    int32_t i;
-    for (i = 0; i < nv; i++) {
-        qmax = fmax(qmax, fabs(q1[i]));
-        dmax = fmax(dmax, fabs(dq[i]));
+    return dmax <= (step ? REFINE_LEVEL_LATER : REFINE_LEVEL) * u * qmax;
+}
+
+/* One cycle of right-preconditioned GMRES on M dq = r (R->r, norm rn), P =
+ * the DCA correction solve, at most KRYLOV_MAX steps: the flexible variant
+ * (Saad 1993), which keeps every z_j = P v_j, since P in floating point is
+ * not exactly linear. Arnoldi on M P by Gram-Schmidt applied twice, Givens
+ * rotations for the small least-squares problem. After each step the iterate
+ * qdd + Z y is formed in R->q1 (y minimizing the estimated residual); the
+ * cycle stops once a step moved it by a resolved amount (*done set), or the
+ * Krylov space is exhausted. Returns the steps taken (0: none usable). */
+static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
+{
+    struct refine *R = L->rf;
+    const int32_t nv = L->nv;
+    const size_t snv = (size_t)nv + 1;
+    double h[KRYLOV_MAX + 1][KRYLOV_MAX], cs[KRYLOV_MAX], sn[KRYLOV_MAX], g[KRYLOV_MAX + 1], y[KRYLOV_MAX];
+    int32_t i, j, l, k = 0;
+    g[0] = rn;
+    for (j = 0; j < KRYLOV_MAX; j++) {
+        double *vj = R->v + (size_t)j * snv, *w = R->v + (size_t)(j + 1) * snv, *zj = R->z + (size_t)j * snv;
+        double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
+        int rep;
+        if (j == 0) {
+            /* the plain correction P r first: where it is resolved, it is
+             * the answer (plain refinement, bit for bit, no Arnoldi step;
+             * also when the basis cannot be allocated) */
+            if (correction(L, R->r) != 0) break;
+            for (i = 0; i < nv; i++) {
+                R->q1[i] = L->qdd[i] + R->dq[i];
+                dmax = fmax(dmax, fabs(R->dq[i]));
+                qmax = fmax(qmax, fabs(R->q1[i]));
+            }
+            if (resolved(dmax, qmax, 0) || krylov_alloc(L) != 0) {
+                *done = 1;
+                return 1;
+            }
+            dmax = qmax = 0.0;
+            vj = R->v; /* allocated now */
+            w = R->v + snv;
+            zj = R->z;
+            for (i = 0; i < nv; i++) {
+                vj[i] = R->r[i] / rn;
+                zj[i] = R->dq[i] / rn;
+            }
+        } else {
+            if (correction(L, vj) != 0) break;
+            memcpy(zj, R->dq, sizeof(double) * (size_t)nv);
+        }
+        residual_mass_mul(L, zj, w);
+        for (l = 0; l <= j; l++) h[l][j] = 0.0;
+        for (rep = 0; rep < 2; rep++) /* Gram-Schmidt, twice */
+            for (l = 0; l <= j; l++) {
+                const double *vl = R->v + (size_t)l * snv;
+                double d = 0.0;
+                for (i = 0; i < nv; i++) d += vl[i] * w[i];
+                for (i = 0; i < nv; i++) w[i] -= d * vl[i];
+                h[l][j] += d;
+            }
+        for (i = 0; i < nv; i++) nw += w[i] * w[i];
+        nw = sqrt(nw);
+        if (!isfinite(nw)) break;
+        h[j + 1][j] = nw;
+        if (nw > 0.0)
+            for (i = 0; i < nv; i++) w[i] /= nw;
+        for (l = 0; l < j; l++) { /* the previous rotations */
+            const double a = h[l][j], b = h[l + 1][j];
+            h[l][j] = cs[l] * a + sn[l] * b;
+            h[l + 1][j] = -sn[l] * a + cs[l] * b;
+        }
+        den = hypot(h[j][j], h[j + 1][j]);
+        if (!(den > 0.0) || !isfinite(den)) break;
+        cs[j] = h[j][j] / den;
+        sn[j] = h[j + 1][j] / den;
+        h[j][j] = den;
+        h[j + 1][j] = 0.0;
+        g[j + 1] = -sn[j] * g[j];
+        g[j] = cs[j] * g[j];
+        for (l = j; l >= 0; l--) { /* y = H^-1 g, H upper triangular */
+            double s = g[l];
+            for (i = l + 1; i <= j; i++) s -= h[l][i] * y[i];
+            y[l] = s / h[l][l];
+        }
+        for (i = 0; i < nv; i++) { /* q1 = qdd + Z y, and how far it moved */
+            double d = 0.0;
+            for (l = 0; l <= j; l++) d += R->z[(size_t)l * snv + i] * y[l];
+            dmax = fmax(dmax, fabs(d - (j ? R->q1[i] - L->qdd[i] : 0.0)));
+            R->q1[i] = L->qdd[i] + d;
+            qmax = fmax(qmax, fabs(R->q1[i]));
+        }
+        k = j + 1;
+        if (resolved(dmax, qmax, j) || nw == 0.0) { /* nw = 0: the exact solution is in the space */
+            *done = 1;
+            break;
+        }
     }
-    return dmax <= REFINE_LEVEL * u * qmax;
+    return k;
 }
 
 aqs_status refine_exact(aqs_linkage *L)
 {
     struct refine *R;
     double rn, *tmp;
-    int32_t sweep, i, nv = L->nv, kept = 0, current = 1;
+    int32_t cycle, nv = L->nv, kept = 0, current = 1;
+    int done = 0;
     aqs_status st;
     L->s.refined = 0;
     if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return AQS_OK;
@@ -167,11 +291,11 @@ aqs_status refine_exact(aqs_linkage *L)
     rn = residual_eval(L, L->qdd, R->r);
     if (!isfinite(rn) || rn == 0.0) return AQS_OK;
     save_loads(L, 0);
-    for (sweep = 0; sweep < L->refine_max; sweep++) {
+    for (cycle = 0; cycle < L->refine_max && !done; cycle++) {
         double rn1;
-        if (correction(L, R->r) != 0) break;
-        for (i = 0; i < nv; i++) R->q1[i] = L->qdd[i] + R->dq[i];
-        rn1 = residual_eval(L, R->q1, R->r2);
+        const int32_t k = gmres_cycle(L, rn, &done);
+        if (k == 0) break;
+        rn1 = residual_eval(L, R->q1, R->r2); /* the true residual */
         current = 0;
         /* kept only when finite (the residual of a non-finite candidate is
          * not) and the residual went down */
@@ -180,8 +304,8 @@ aqs_status refine_exact(aqs_linkage *L)
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
         current = 1;
-        kept++;
-        if (rn == 0.0 || resolved(R->dq, R->q1, nv)) break;
+        kept += k;
+        if (rn == 0.0) break;
     }
     save_loads(L, 1);
     if (kept) {

@@ -12,8 +12,11 @@
  * articulated-body solve's own answer is at the rounding level (tests/
  * test_refine.c). In working precision: a residual in double-double was
  * measured to buy nothing refinement could use, at 7x the cost (docs/math.md
- * §13a). Scratch: the articulated-body solver's per-solve node values (X, and
- * v.s for a_c and f_c), which every solve that reads them rewrites first. */
+ * §13a). The same pass at zero gravity, no load and no joint force is the
+ * product M v by the joint-space inertia matrix (residual_mass_mul, the
+ * operator of the refinement's GMRES). Scratch: the articulated-body
+ * solver's per-solve node values (X, and v.s for a_c and f_c), which every
+ * solve that reads them rewrites first. */
 #include "residual.h"
 
 #include <math.h>
@@ -28,7 +31,9 @@ void residual_poses(aqs_linkage *L)
     for (k = 0; k < L->m.ne; k++) kin_joint_pose(L, &a->joint[k], &a->node[k].X);
 }
 
-double residual_eval(aqs_linkage *L, const double *qdd, double *r)
+/* The pass of both: homog = 0, r = Q - ID(qdd) with gravity and the loads;
+ * homog = 1, r = M qdd (no gravity, no load, no joint force, sign flipped). */
+static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
@@ -36,7 +41,7 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r)
     int32_t k, i, j;
     for (i = 0; i < 3; i++) {
         g[i] = 0.0;
-        g[3 + i] = -L->gravity[i];
+        g[3 + i] = homog ? 0.0 : -L->gravity[i];
     }
     for (k = 0; k < m->ne; k++) { /* outward: accelerations, then I a */
         const aba_joint *jt = &a->joint[k];
@@ -58,7 +63,7 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r)
         }
         kin_inertia_mul(jt->I, ac, nd->v.s.U);
     }
-    for (i = 0; i < m->nloaded_comps; i++) { /* minus the loads (none on the world) */
+    for (i = 0; i < (homog ? 0 : m->nloaded_comps); i++) { /* minus the loads (none on the world) */
         const int32_t c = m->loaded_comps[i];
         double *f = a->node[a->pos_of_comp[c]].v.s.U;
         for (j = 0; j < 6; j++) f[j] -= m->comp_force[6 * c + j];
@@ -71,7 +76,7 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r)
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             const double *x = jt->axis, *fo = f + (jt->type == AQS_JOINT_REVOLUTE ? 0 : 3);
             const double s = x[0] * fo[0] + x[1] * fo[1] + x[2] * fo[2];
-            rk[0] = Q[0] - s;
+            rk[0] = homog ? s : Q[0] - s;
             sq += rk[0] * rk[0];
         } else {
             const int d = joint_nv(jt->type);
@@ -79,7 +84,7 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r)
             for (j = 0; j < d; j++) {
                 double s = 0.0;
                 for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
-                rk[j] = Q[j] - s;
+                rk[j] = homog ? s : Q[j] - s;
                 sq += rk[j] * rk[j];
             }
         }
@@ -90,6 +95,16 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r)
         }
     }
     return sqrt(sq);
+}
+
+double residual_eval(aqs_linkage *L, const double *qdd, double *r)
+{
+    return id_pass(L, qdd, r, 0);
+}
+
+void residual_mass_mul(aqs_linkage *L, const double *v, double *Mv)
+{
+    (void)id_pass(L, v, Mv, 1);
 }
 
 void residual_forces(const aqs_linkage *L, double *cforce)

@@ -18,6 +18,11 @@ void residual_poses(aqs_linkage *L);
  * or inf when a value is not finite). The joint forces f it formed stay in
  * the node values (v.s.U) until residual_forces or the next solve. */
 double residual_eval(aqs_linkage *L, const double *qdd, double *r);
+/* Mv (nv) = M v, the joint-space inertia matrix at the current positions
+ * times v: the same pass at zero gravity, no load, no joint force (the
+ * operator of refine.c's GMRES). Needs residual_poses; overwrites the forces
+ * residual_forces reads. */
+void residual_mass_mul(aqs_linkage *L, const double *v, double *Mv);
 /* The joint forces of the last residual_eval into cforce (6 per user joint,
  * L->cforce's convention: the force of the joint on its child composite, in
  * the composite's frame); fixed joints' entries are not written. */

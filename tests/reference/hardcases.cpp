@@ -119,7 +119,12 @@ struct KnownBad {
 // computed joints are not refined: their entries stay). These do not reach 10x the ABA yet
 // (and the adaptive "true <= bound + 10x ABA" fails with them):
 const KnownBad kKnownBad[] = {
-    {"altmass/r=1e+09/", true, true, "mass ratio 1e9: refined DCA 1e-12 .. 2e-10 at 100 links, none gained at 1000"},
+    // Long mode: 10^4 links (GMRES's 20 Krylov steps are not enough there at 1e9: docs/math.md
+    // §13a; the exact DCA passes at 1e3 and 1e6). First, since the first matching prefix decides.
+    {"altmass/r=1e+03/n=10000", false, false, "passes (asserted)"},
+    {"altmass/r=1e+06/n=10000", false, true, "adaptive: mass ratio (refined DCA 1.8e-15)"},
+    {"altmass/r=1e+09/n=10000", true, true, "mass ratio 1e9 at 10^4 links: GMRES-IR not converged in 20 steps"},
+    {"altmass/r=1e+09/", false, true, "adaptive: mass ratio 1e9 (the refined DCA passes since GMRES-IR)"},
     {"altmass/r=1e+03/n=1000", false, false, "passes (asserted)"},
     // Adaptive solves that compute every joint are refined too (2026-12-03); those that skip
     // joints carry the unrefined DCA's rounding in their computed joints. Over 13 seeds these
@@ -131,9 +136,6 @@ const KnownBad kKnownBad[] = {
     // Long mode: the straight chain under gravity at 10^6 links, 1.4e-12 (the ABA 1.3e-16;
     // 5e-16 at 10^5, and the same chain under a tip force 1.9e-16 at 10^6).
     {"chain/straight/g/n=1000000", true, true, "DCA 1.4e-12 at 10^6 links under gravity"},
-    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+09/n=10000", true, true, "mass ratio"},
 };
 // The inverse-inertia form (AQS_DCA_FORM_PHI), measured on main at 90aa04b, when it was the
 // only form.
@@ -143,16 +145,20 @@ const KnownBad kKnownBadPhi[] = {
     {"pointmass/chain6/k=1e-06", false, true, "adaptive: Phi ~ 1/k (refined DCA passes)"},
     {"pointmass/chain6/k=1e-08", false, true, "adaptive: Phi ~ 1/k (refined DCA passes)"},
     {"pointmass/chain6/k=1e-10", false, true, "adaptive: Phi ~ 1/k (refined DCA passes)"},
-    {"pointmass/chain6/", true, true, "Phi ~ 1/k: DCA error ~ 1e-17/k; refined from 1e-12 on: 1.4e-12 .. 0.29"},
-    {"altmass/r=1e+03/", false, true, "adaptive: mass ratio (refined DCA passes)"},
-    {"altmass/r=1e+06/n=1000", true, true, "mass ratio: refined DCA 2.2e-10"},
-    {"altmass/r=1e+06/n=100", false, true, "adaptive: mass ratio (refined DCA passes)"},
-    {"altmass/", true, true, "mass ratio: DCA error ~ 1e-15 x ratio^(1/2..1); refined 2e-10 .. 4e-6"},
+    // Since the refinement is GMRES (2026-12-03, 13 seeds) the refined DCA passes at k = 1e-12
+    // .. 1e-15, floating bases at 1e-12, alternating masses 1e6 at 1,000 links and 1e9 at 100;
+    // k = 1e-16 fails 3 of 13 (2 AQS_ENUMERIC), 1e9 at 1,000 links 9.6e-9.
+    {"pointmass/chain6/k=1e-16", true, true, "Phi ~ 1/k: 2 of 13 ENUMERIC, 1 above 10x"},
+    {"pointmass/chain6/", false, true, "adaptive: Phi ~ 1/k (refined DCA passes)"},
+    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+09/n=10000", true, true, "mass ratio"},
+    {"altmass/r=1e+09/n=1000", true, true, "mass ratio 1e9: GMRES-refined DCA 9.6e-9"},
+    {"altmass/", false, true, "adaptive: mass ratio (refined DCA passes)"},
     {"near_eq/", false, true, "adaptive: DCA 1000-2700x the ABA's error (refined DCA passes)"},
     {"prismatic/n=100000", true, true, "DCA 65-115x the ABA's error"},
     {"prismatic/n=100", false, false, "passes (asserted)"},
     {"prismatic/", false, true, "adaptive: DCA 65-115x the ABA's error (refined DCA passes)"},
-    {"floating/k=1e-12", true, true, "tiny base inertia: DCA error ~ 1e-17/k; refined 2.3e-10"},
     {"floating/", false, true, "adaptive: tiny base inertia (refined DCA passes)"},
     {"tree/", false, true, "adaptive: random trees 1e-13 .. 3e-13, 300x the ABA (refined DCA passes)"},
     // Long mode only (make bench-hard): AQS_ENUMERIC from 13,000 links on for the straight
@@ -166,9 +172,6 @@ const KnownBad kKnownBadPhi[] = {
     {"chain/nearsing/g+tip/n=100000", true, true, "ENUMERIC"},
     {"chain/straight/g/n=1000000", true, true, "ENUMERIC"},
     {"chain/straight/tip/n=1000000", true, true, "ENUMERIC"},
-    {"altmass/r=1e+03/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+06/n=10000", true, true, "mass ratio"},
-    {"altmass/r=1e+09/n=10000", true, true, "mass ratio"},
 };
 
 const double kEps[] = {0.5, 1.0 / 32, 1.0 / 1024, 1.0 / 524288, 1.0 / 1073741824.0};

@@ -992,10 +992,11 @@ class Linkage:
         return EXACT_SOLVER_NAMES[value.value]
 
     def set_exact_refinement(self, max_corrections):
-        """At most max_corrections (0 .. 3, default 3; 0: off) corrections
-        of a solve computing every joint through the DCA (the exact DCA
-        solve, or an adaptive solve that computed every joint) by the DCA
-        itself with the inverse-dynamics residual as the load, each kept
+        """At most max_corrections (0 .. 3, default 3; 0: off) refinement
+        cycles of a solve computing every joint through the DCA (the exact
+        DCA solve, or an adaptive solve that computed every joint): GMRES
+        preconditioned by the DCA itself with the inverse-dynamics residual
+        as the load, its first step the plain correction, each cycle kept
         only when it lowers the residual (aqs_linkage_set_exact_refinement,
         docs/math.md 13a). Any phase."""
         self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
