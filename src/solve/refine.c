@@ -197,8 +197,15 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
     int32_t i, j, l, k = 0;
     g[0] = rn;
     for (j = 0; j < KRYLOV_MAX; j++) {
-        double *vj = R->v + (size_t)j * snv, *w = R->v + (size_t)(j + 1) * snv, *zj = R->z + (size_t)j * snv;
+        /* the basis is allocated at the first step that needs it: no
+         * arithmetic on its NULL pointer before that */
+        double *vj = NULL, *w = NULL, *zj = NULL;
         double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
+        if (j > 0) {
+            vj = R->v + (size_t)j * snv;
+            w = R->v + (size_t)(j + 1) * snv;
+            zj = R->z + (size_t)j * snv;
+        }
         int rep;
         if (j == 0) {
             /* the plain correction P r first: where it is resolved, it is
