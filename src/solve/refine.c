@@ -201,12 +201,12 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
          * arithmetic on its NULL pointer before that */
         double *vj = NULL, *w = NULL, *zj = NULL;
         double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
+        int rep;
         if (j > 0) {
             vj = R->v + (size_t)j * snv;
             w = R->v + (size_t)(j + 1) * snv;
             zj = R->z + (size_t)j * snv;
         }
-        int rep;
         if (j == 0) {
             /* the plain correction P r first: where it is resolved, it is
              * the answer (plain refinement, bit for bit, no Arnoldi step;
