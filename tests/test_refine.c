@@ -123,6 +123,20 @@ static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
     return L;
 }
 
+/* The ABA's answer (the default solver) into qa, fa, then the refined exact
+ * DCA's into qd, fd (the automatic path off); nv accelerations, 6 nj forces. */
+static void aba_then_dca(aqs_linkage *L, int32_t nv, int32_t nj, double *qa, double *fa, double *qd, double *fd)
+{
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, fa, 6 * (size_t)nj), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, fd, 6 * (size_t)nj), AQS_OK);
+}
+
 /* The refined exact DCA within 1e-13 of the ABA (relative 2-norm; the ABA is
  * 5e-16 .. 1e-15 from the truth here, the refined DCA 2e-16, hardcases),
  * where the unrefined back-substitution (the adaptive path computing every
@@ -143,15 +157,8 @@ static void test_altmass(void **state)
         fa = calloc(6 * (size_t)nj, sizeof *fa);
         fd = calloc(6 * (size_t)nj, sizeof *fd);
         assert_non_null(qa && qd && qu && fa && fd);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA (default) */
-        assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)nv), AQS_OK);
-        assert_int_equal(aqs_linkage_get_constraint_forces(L, fa, 6 * (size_t)nj), AQS_OK);
-        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
-        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        aba_then_dca(L, nv, nj, qa, fa, qd, fd);
         assert_true(L->s.refined >= 1);
-        assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
-        assert_int_equal(aqs_linkage_get_constraint_forces(L, fd, 6 * (size_t)nj), AQS_OK);
         assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-13);
         /* forces (welded bodies' fixed joints included): the inverse dynamics'
          * of the refined answer against the ABA's. Measured 1.6e-11 relative
@@ -261,15 +268,8 @@ static void test_altmass_gmres(void **state)
         fa = calloc(6 * (size_t)nj, sizeof *fa);
         fd = calloc(6 * (size_t)nj, sizeof *fd);
         assert_non_null(qa && qd && fa && fd);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA (default) */
-        assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)nv), AQS_OK);
-        assert_int_equal(aqs_linkage_get_constraint_forces(L, fa, 6 * (size_t)nj), AQS_OK);
-        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
-        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        aba_then_dca(L, nv, nj, qa, fa, qd, fd);
         assert_true(L->s.refined >= 2);
-        assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
-        assert_int_equal(aqs_linkage_get_constraint_forces(L, fd, 6 * (size_t)nj), AQS_OK);
         print_message("altmass 1e9 n=%d seed %d: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", cases[c].n,
                       (int)cases[c].seed, test_rel_diff(qd, qa, (size_t)nv), (int)L->s.refined,
                       test_rel_diff(fd, fa, 6 * (size_t)nj));
