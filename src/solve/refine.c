@@ -67,19 +67,21 @@ void refine_free(aqs_linkage *L)
     L->rf = NULL;
 }
 
-static aqs_status refine_alloc(aqs_linkage *L)
+/* The refinement's arrays, at the first solve that refines. Returns 0, or -1
+ * when out of memory (nothing kept: that solve is returned unrefined). */
+static int refine_alloc(aqs_linkage *L)
 {
     const tree *t = &L->t;
     struct refine *R;
     size_t n = 0, nv = (size_t)L->nv + 1;
     int32_t k;
-    if (L->rf) return AQS_OK;
+    if (L->rf) return 0;
     for (k = 0; k < t->nnodes; k++) {
         const node *nd = &t->nodes[k];
         n += 12 * (size_t)nd->nh + (nd->joint >= 0 ? (size_t)nd->d + 6 + 5 : 0);
     }
     R = lk_calloc_in(L, LK_MEM_DCA, 1, sizeof *R);
-    if (!R) return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
+    if (!R) return -1;
     L->rf = R;
     R->save = lk_calloc_in(L, LK_MEM_DCA, n + 1, sizeof(double));
     R->r = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
@@ -89,9 +91,9 @@ static aqs_status refine_alloc(aqs_linkage *L)
     R->df = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->njoints + 1, sizeof(double));
     if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->df) {
         refine_free(L);
-        return lk_fail(L, AQS_ENOMEM, "aqs_linkage_solve: out of memory for the refinement");
+        return -1;
     }
-    return AQS_OK;
+    return 0;
 }
 
 /* The Krylov basis, at the first solve whose first correction is not
@@ -283,20 +285,19 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
     return k;
 }
 
-aqs_status refine_exact(aqs_linkage *L)
+void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
     double rn, *tmp;
     int32_t cycle, nv = L->nv, kept = 0, current = 1;
     int done = 0;
-    aqs_status st;
     L->s.refined = 0;
-    if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return AQS_OK;
-    if ((st = refine_alloc(L)) != AQS_OK) return st;
+    if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return;
+    if (refine_alloc(L) != 0) return; /* out of memory: the answer as it is */
     R = L->rf;
     residual_poses(L);
     rn = residual_eval(L, L->qdd, R->r);
-    if (!isfinite(rn) || rn == 0.0) return AQS_OK;
+    if (!isfinite(rn) || rn == 0.0) return;
     save_loads(L, 0);
     for (cycle = 0; cycle < L->refine_max && !done; cycle++) {
         double rn1;
@@ -323,5 +324,4 @@ aqs_status refine_exact(aqs_linkage *L)
         if (L->m.nwelded > 0) aba_welded_forces(L);
     }
     L->s.refined = kept;
-    return AQS_OK;
 }

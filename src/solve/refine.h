@@ -12,9 +12,11 @@
  * then holds the inverse dynamics' forces of the refined accelerations
  * (fixed joints' included). The DCA's stored load-dependent values (b, rho,
  * gamma, handle forces, the rounding levels) are those of the unrefined
- * solve again on return; the solve's stats are not changed. AQS_ENOMEM
- * (message set) when its arrays cannot be allocated. */
-aqs_status refine_exact(aqs_linkage *L);
+ * solve again on return; the solve's stats are not changed. Its arrays are
+ * allocated at the first call that refines; if that allocation fails the
+ * answer is left unrefined (L->s.refined 0, no error: a solve or step never
+ * fails for the refinement's memory), and the next call tries again. */
+void refine_exact(aqs_linkage *L);
 void refine_free(aqs_linkage *L);
 
 #endif
