@@ -35,6 +35,20 @@ static double norm2(const double *x, size_t n)
     return sqrt(s);
 }
 
+/* The random trees of the residual tests: 30 bodies of every joint type,
+ * masses over a factor 10, gravity, 3 loads; a floating base when k is odd. */
+static aqs_linkage *residual_tree(uint64_t *rng, int k)
+{
+    test_tree_spec sp;
+    memset(&sp, 0, sizeof sp);
+    sp.nbodies = 30;
+    sp.floating = k % 2;
+    sp.gravity = 1;
+    sp.nforces = 3;
+    sp.mass_spread = 10.0;
+    return test_random_tree(rng, &sp);
+}
+
 /* The residual of the ABA's answer, against the residual at qdd = 0 (the
  * loads' and gravity's joint forces, the size of the terms): the ABA is
  * backward stable, so a few u times the depth (30 bodies here): 1e-12
@@ -45,17 +59,10 @@ static void test_residual_of_aba(void **state)
     int k;
     (void)state;
     for (k = 0; k < 20; k++) {
-        test_tree_spec sp;
         aqs_linkage *L;
         int32_t nv, nj, j;
         double *qdd, *r, *zero, *f, *fr, rn, r0, rp;
-        memset(&sp, 0, sizeof sp);
-        sp.nbodies = 30;
-        sp.floating = k % 2;
-        sp.gravity = 1;
-        sp.nforces = 3;
-        sp.mass_spread = 10.0;
-        L = test_random_tree(&rng, &sp);
+        L = residual_tree(&rng, k);
         assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
         assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv), AQS_OK);
@@ -204,17 +211,10 @@ static void test_mass_mul(void **state)
     int k;
     (void)state;
     for (k = 0; k < 20; k++) {
-        test_tree_spec sp;
         aqs_linkage *L;
         int32_t nv, i;
         double *u, *v, *Mu, *Mv, *r0, *rv, *zero, uMv = 0.0, vMu = 0.0, vMv = 0.0, sc = 0.0;
-        memset(&sp, 0, sizeof sp);
-        sp.nbodies = 30;
-        sp.floating = k % 2;
-        sp.gravity = 1;
-        sp.nforces = 3;
-        sp.mass_spread = 10.0;
-        L = test_random_tree(&rng, &sp);
+        L = residual_tree(&rng, k);
         assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA: its node poses */
         assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
         u = calloc((size_t)nv, sizeof *u);
