@@ -547,6 +547,34 @@ AQS_API aqs_status aqs_linkage_set_exact_fallback(aqs_linkage *linkage, double f
  *  AQS_OK, AQS_EINVAL (NULL). */
 AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, double *fraction);
 
+/** Rounding fallback (on by default): an adaptive solve that skips joints
+ *  estimates what the DCA's rounding adds to its measure
+ *  (aqs_solve_stats.rounding_bound, docs/math.md §10a). When that estimate,
+ *  relative to the solution's size in the measure, exceeds level (or cannot
+ *  be given: a near-singular pivot), its computed joints and its bound are
+ *  not as accurate as an exact solve would be (large mass ratios, light
+ *  parts behind heavy ones, states near equilibrium), so the solve is done
+ *  again exactly, by the articulated-body algorithm, and so are the next
+ *  AQS_FALLBACK_RUN solves; the one after is adaptive again. Those solves
+ *  report error_bound 0, every joint computed, path AQS_PATH_EXACT_ABA and
+ *  aqs_solve_stats.rounding_fallback = 1. The relative size is the
+ *  estimate itself for the relative measures, and over the DCA's 2-norm of
+ *  the joint accelerations (abs_linkage), its largest computed joint
+ *  acceleration (abs_joint) or its lower bound on the bodies' largest
+ *  acceleration (abs_world). Default AQS_ROUNDING_FALLBACK_LEVEL (1e-9:
+ *  above every benign case of the hard-case suite by 25x, below every case
+ *  whose adaptive solve was less accurate than the ABA's error allows by 50x,
+ *  docs/hardcases.md); 0 turns it off. Only in the square-root DCA form (the
+ *  other has no estimate); inactive with a cap or eps = 0; the exact fallback
+ *  takes precedence. Setting it, a tolerance or a cap starts over with an
+ *  adaptive solve. Any phase. Returns AQS_OK, AQS_EINVAL (level not finite
+ *  or < 0; nothing changed). */
+#define AQS_ROUNDING_FALLBACK_LEVEL 1e-9
+AQS_API aqs_status aqs_linkage_set_rounding_fallback(aqs_linkage *linkage, double level);
+/** The level of aqs_linkage_set_rounding_fallback into *level. Returns
+ *  AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage, double *level);
+
 /** Prediction: a joint whose node's total acceleration A(C) exceeded
  *  margin x the stopping level of the last adaptive solve (the largest A a
  *  queued node may have when it stops: eps^2, (eps L)^2 for
@@ -630,6 +658,8 @@ typedef struct aqs_solve_stats {
                                   0: no honest bound (rounding above eps, a near-singular pivot, the
                                   inverse-inertia form, a world measure (not estimated), or an exact
                                   solve by the ABA, which does not estimate its rounding) */
+    int32_t rounding_fallback; /**< 1 if the last solve was exact because of the rounding fallback
+                                    (aqs_linkage_set_rounding_fallback) */
 } aqs_solve_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Returns AQS_OK,

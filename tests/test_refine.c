@@ -13,7 +13,9 @@
  *     adaptive solve after a refined exact one is bit for bit the one of a
  *     twin linkage that never refined;
  *   - a linkage at rest (zero residual) is not refined; the setting turns it
- *     off and refuses values out of range.
+ *     off and refuses values out of range;
+ *   - the rounding fallback: an adaptive solve whose estimated rounding is
+ *     above the level is the ABA's instead (and a run after it).
  * The reference is the articulated-body solve: an independent algorithm,
  * within 1e-15 of a __float128 reference on these families
  * (tests/reference/hardcases.cpp: altmass r = 1e6, ABA 5e-16 .. 1e-15). */
@@ -361,7 +363,10 @@ static void test_adaptive_all(void **state)
     assert_int_equal(aqs_linkage_get_accelerations(X, qx, (size_t)nv), AQS_OK);
     assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-13);
     assert_true(test_rel_diff(qx, qa, (size_t)nv) > 1e-12); /* the unrefined twin: not reached */
-    /* a solve that skips joints: not refined */
+    /* a solve that skips joints: not refined (the rounding fallback off: at
+     * this mass ratio it would answer with the ABA, test_rounding_fallback) */
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.125), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(X, AQS_METRIC_REL_JOINT, 0.125), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
@@ -473,6 +478,141 @@ static void test_rest(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* The rounding fallback (aqs_linkage_set_rounding_fallback, on by default).
+ * Masses alternating by 1e9 over 100 links: an adaptive solve that skips
+ * joints estimates its rounding far above the level (hardcases: 6e-3 ..
+ * 2e-2 relative at rel_joint, where its computed joints are 1e-8 .. 1e-6
+ * off), so the solve is the ABA's instead: bit for bit the accelerations of
+ * a twin's exact solve, error_bound 0, the stats flag set; so are the next
+ * AQS_FALLBACK_RUN solves and steps (positions bit for bit the twin's exact
+ * steps), then the adaptive solver is tried again. With the level 0 the
+ * same solve skips joints and reports that estimate (> the default level:
+ * the test of the trigger can fail). A benign random tree (the hard-case
+ * suite's benign families estimate at most 4e-11) and the inverse-inertia
+ * form (no estimate) never fall back; bad levels are rejected. */
+static void test_rounding_fallback(void **state)
+{
+    aqs_linkage *L = altmass(100, 1e9, 0, 5), *X = altmass(100, 1e9, 0, 5), *P;
+    static const double bad[] = {NAN, INFINITY, -1e-9};
+    int32_t nv, nq, k, i;
+    double *a, *e, lv = -1;
+    aqs_solve_stats st;
+    (void)state;
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, &nv), AQS_OK);
+    a = calloc((size_t)(nv + nq), sizeof *a);
+    e = calloc((size_t)(nv + nq), sizeof *e);
+    assert_non_null(a && e);
+    assert_int_equal(aqs_linkage_get_rounding_fallback(L, &lv), AQS_OK);
+    assert_true(lv == AQS_ROUNDING_FALLBACK_LEVEL);
+    for (k = 0; k < 3; k++) {
+        assert_int_equal(aqs_linkage_set_rounding_fallback(L, bad[k]), AQS_EINVAL);
+        test_assert_contains(aqs_linkage_last_error(L), "level");
+        assert_int_equal(aqs_linkage_get_rounding_fallback(L, &lv), AQS_OK);
+        assert_true(lv == AQS_ROUNDING_FALLBACK_LEVEL);
+    }
+    assert_int_equal(aqs_linkage_get_rounding_fallback(L, NULL), AQS_EINVAL);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK); /* the fallback alone */
+    /* off: the adaptive solve skips joints, its estimate above the level */
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
+    assert_int_equal(st.rounding_fallback, 0);
+    assert_true(st.computed_joints < st.counted_joints);
+    assert_true(st.rounding_bound > 1e3 * AQS_ROUNDING_FALLBACK_LEVEL);
+    /* on (the default level): exact by the ABA, this solve and a run */
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, AQS_ROUNDING_FALLBACK_LEVEL), AQS_OK);
+    for (k = 0; k <= AQS_FALLBACK_RUN; k++) {
+        const int step = k >= 2;
+        assert_int_equal(aqs_linkage_solve(X), AQS_OK); /* the twin's exact solve, where L starts */
+        assert_int_equal(aqs_linkage_get_accelerations(X, e, (size_t)nv), AQS_OK);
+        assert_int_equal(step ? aqs_linkage_step(L, 1e-3) : aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(st.path, AQS_PATH_EXACT_ABA);
+        assert_int_equal(st.rounding_fallback, 1);
+        assert_int_equal(st.fallback, 0);
+        assert_true(st.error_bound == 0.0);
+        assert_int_equal(st.computed_joints, st.counted_joints);
+        assert_int_equal(aqs_linkage_get_accelerations(L, a, (size_t)nv), AQS_OK);
+        assert_memory_equal(a, e, sizeof(double) * (size_t)nv);
+        if (step) {
+            assert_int_equal(aqs_linkage_step(X, 1e-3), AQS_OK);
+            assert_int_equal(aqs_linkage_get_positions(L, a, (size_t)nq), AQS_OK);
+            assert_int_equal(aqs_linkage_get_positions(X, e, (size_t)nq), AQS_OK);
+            assert_memory_equal(a, e, sizeof(double) * (size_t)nq);
+        }
+    }
+    /* the run is over: adaptive again, which falls back again */
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 0);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, AQS_ROUNDING_FALLBACK_LEVEL), AQS_OK);
+    for (k = 0; k < AQS_FALLBACK_RUN; k++) {
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+        assert_int_equal(st.rounding_fallback, 1);
+    }
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the probe: adaptive, and due again */
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 1);
+    /* a cap or eps = 0: never */
+    assert_int_equal(aqs_linkage_set_max_computed(L, 10), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 0);
+    assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
+    assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 0);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
+    /* the inverse-inertia form: no estimate, never a fallback */
+    assert_int_equal(aqs_linkage_create(&P), AQS_OK);
+    assert_int_equal(aqs_linkage_set_dca_form(P, AQS_DCA_FORM_PHI), AQS_OK);
+    {
+        const double com[3] = {0.5, 0, 0}, quat[4] = {1, 0, 0, 0}, g[3] = {9.81, 0, 0}, az[3] = {0, 0, 1};
+        int32_t prev = AQS_WORLD, b;
+        for (i = 0; i < 40; i++) {
+            const double m = i % 2 ? 1e9 : 1.0, I[9] = {0.01 * m, 0, 0, 0, 0.1 * m, 0, 0, 0, 0.1 * m};
+            const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+            assert_int_equal(aqs_body_add(P, m, com, I, &b), AQS_OK);
+            assert_int_equal(aqs_joint_add(P, AQS_JOINT_REVOLUTE, prev, b, pos, quat, az, NULL), AQS_OK);
+            prev = b;
+        }
+        assert_int_equal(aqs_linkage_finalize(P), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(P, g), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_set_auto(P, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(P, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(P), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(P, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 0);
+    assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
+    aqs_linkage_destroy(P);
+    /* benign random trees at the benchmarks' eps: adaptive, below the level */
+    for (k = 0; k < 4; k++) {
+        uint64_t rng = 77 + (uint64_t)k;
+        aqs_linkage *T = residual_tree(&rng, k);
+        assert_int_equal(aqs_linkage_set_auto(T, 0), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(T, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+        for (i = 0; i < 3; i++) {
+            assert_int_equal(aqs_linkage_step(T, 1e-3), AQS_OK);
+            assert_int_equal(aqs_linkage_get_stats(T, &st), AQS_OK);
+            assert_int_equal(st.rounding_fallback, 0);
+            assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
+            assert_true(st.rounding_bound <= AQS_ROUNDING_FALLBACK_LEVEL / 10);
+        }
+        aqs_linkage_destroy(T);
+    }
+    free(a);
+    free(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -485,6 +625,7 @@ int main(void)
         cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_setting),
         cmocka_unit_test(test_rest),
+        cmocka_unit_test(test_rounding_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -133,6 +133,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->t.root = -1;
     autopath_init(L);
     L->refine_max = AQS_REFINEMENT_MAX;
+    L->rfb_level = AQS_ROUNDING_FALLBACK_LEVEL;
     *out = L;
     return AQS_OK;
 }
@@ -767,14 +768,33 @@ static int fallback_applies(const aqs_linkage *L)
     return L->fallback > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
 }
 
+/* The rounding fallback applies to adaptive solves (eps > 0, no cap) in the
+ * square-root form, the one whose rounding is estimated. */
+static int rounding_fallback_applies(const aqs_linkage *L)
+{
+    return L->rfb_level > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0 &&
+           L->dca_form == AQS_DCA_FORM_SQRT;
+}
+
+/* After an adaptive solve that skipped joints: its estimated rounding,
+ * relative to the solution's size in the measure, is above the level, or
+ * cannot be estimated (docs/math.md §10a, "The rounding fallback"). */
+static int rounding_fallback_due(const aqs_linkage *L)
+{
+    return rounding_fallback_applies(L) && !L->s.all && !(L->s.rounding_rel <= L->rfb_level);
+}
+
 static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
 {
     aqs_status st;
     int fb = fallback_applies(L) && L->fb_left > 0, chose = 0, auto_exact = 0, by_aba;
+    int rfb = !fb && rounding_fallback_applies(L) && L->rfb_left > 0;
     int32_t path;
     L->exact_by_aba = 0;
     L->fb_last = 0;
+    L->rfb_last = 0;
     L->s.refined = 0;
+    fb = fb || rfb;
     if (!fb && autopath_applies(L)) {
         /* the stale marks of the loads first: the model counts them (on a
          * moved tree only the marks: the chosen path re-expresses the loads) */
@@ -806,6 +826,21 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
          * an adaptive solve that computed them all): refined to the
          * articulated-body solve's accuracy (docs/math.md §13a) */
         if (path == AQS_PATH_EXACT_DCA || L->s.nprocessed == L->m.ne) refine_exact(L);
+        else if (rounding_fallback_due(L)) {
+            /* its computed joints and its bound carry more rounding than the
+             * level allows: this solve and the next AQS_FALLBACK_RUN are exact
+             * (docs/math.md §10a, "The rounding fallback") */
+            adaptive_predict_clear(L);
+            if ((st = aba_solve(L)) != AQS_OK) {
+                stale_solve_failed(L);
+                return st;
+            }
+            L->exact_by_aba = 1;
+            path = AQS_PATH_EXACT_ABA;
+            L->rfb_last = 1;
+            L->rfb_left = AQS_FALLBACK_RUN + 1; /* this one is counted below */
+            rfb = 1;
+        }
     }
     if ((st = check_outputs(L, fn)) != AQS_OK) {
         stale_solve_failed(L);
@@ -815,6 +850,9 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
     autopath_after_solve(L, path, chose);
     if (auto_exact) {
         /* the model's exact solve is not a fallback step */
+    } else if (rfb) {
+        L->rfb_left--;
+        L->rfb_last = 1;
     } else if (fb) {
         L->fb_left--;
         L->fb_last = 1;
@@ -954,7 +992,7 @@ AQS_API aqs_status aqs_linkage_set_tolerance(aqs_linkage *L, int32_t metric, dou
     L->s.metric = metric;
     L->s.eps = eps;
     stale_settings(L);
-    L->fb_left = 0;
+    L->fb_left = L->rfb_left = 0;
     autopath_reset(L);
     adaptive_predict_clear(L); /* made for the former measure */
     return AQS_OK;
@@ -973,7 +1011,7 @@ AQS_API aqs_status aqs_linkage_set_max_computed(aqs_linkage *L, int32_t max_join
         stale_tree(L);
     }
     L->s.max_computed = max_joints;
-    L->fb_left = 0;
+    L->fb_left = L->rfb_left = 0;
     autopath_reset(L);
     return AQS_OK;
 }
@@ -996,6 +1034,27 @@ AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *cL, double 
     CHECK_LINKAGE(L);
     CHECK_PTR(L, fn, fraction);
     *fraction = L->fallback;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_rounding_fallback(aqs_linkage *L, double level)
+{
+    static const char fn[] = "aqs_linkage_set_rounding_fallback";
+    CHECK_LINKAGE(L);
+    if (!isfinite(level) || level < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: level = %g must be finite and >= 0", fn, level);
+    L->rfb_level = level;
+    L->rfb_left = 0;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *cL, double *level)
+{
+    static const char fn[] = "aqs_linkage_get_rounding_fallback";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, level);
+    *level = L->rfb_level;
     return AQS_OK;
 }
 
@@ -1113,6 +1172,7 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.cost_exact = L->ap.cost_exact;
     full.rounding_bound = L->s.rounding;
     full.certified = L->s.certified;
+    full.rounding_fallback = L->rfb_last;
     memcpy(stats, &full, size < sizeof full ? size : sizeof full);
     return AQS_OK;
 }

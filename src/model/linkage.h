@@ -213,6 +213,7 @@ typedef struct {
     double rk_max;          /* largest relative error level met (units of u) */
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
+    double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */
     int certified;          /* aqs_solve_stats.certified */
     int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
@@ -344,6 +345,9 @@ struct aqs_linkage {
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */
+    double rfb_level;     /* aqs_linkage_set_rounding_fallback's level (0: off) */
+    int32_t rfb_left;     /* exact solves left in a rounding fallback's run */
+    int rfb_last;         /* the last solve was exact because of the rounding fallback */
     aba_state aba;
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
     struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */

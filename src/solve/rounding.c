@@ -285,7 +285,7 @@ void rounding_finish(aqs_linkage *L)
     int valid = L->dca_form != AQS_DCA_FORM_PHI && s->rnd_ok;
     int32_t i;
     if (t->nnodes == 0) {
-        s->rounding = 0.0;
+        s->rounding = s->rounding_rel = 0.0;
         s->certified = 1;
         return;
     }
@@ -344,10 +344,29 @@ void rounding_finish(aqs_linkage *L)
     if (!(kmax * RND_SAFETY * RND_U <= RND_KAPPA_MAX) || !isfinite(tot)) valid = 0;
     s->rounding = valid ? maxd(tot - T, 0.0) : INFINITY;
     s->certified = valid && (s->eps == 0.0 || s->rounding <= s->eps);
+    /* The same relative to the solution's size in the measure (the rounding
+     * fallback's test, api.c): the relative measures are relative already;
+     * abs_linkage over the DCA's 2-norm of every counted joint (computed
+     * and queued), abs_joint over L (the largest computed joint is at least
+     * that), abs_world over the reached bodies' lower bound. */
+    {
+        double scale;
+        switch (s->metric) {
+        case AQS_METRIC_ABS_LINKAGE:
+            scale = sqrt(s->comp_sq + (s->all ? 0.0 : maxd(s->sum, 0.0)));
+            break;
+        case AQS_METRIC_ABS_JOINT: scale = maxd(s->lower, sqrt(maxd(top, 0.0))); break;
+        case AQS_METRIC_ABS_WORLD: scale = L->wb ? L->wb->lower_r : 0.0; break;
+        default: scale = 1.0; break;
+        }
+        if (!valid) s->rounding_rel = INFINITY;
+        else if (s->rounding == 0.0) s->rounding_rel = 0.0;
+        else s->rounding_rel = scale > 0.0 ? s->rounding / scale : INFINITY;
+    }
 }
 
 void rounding_none(aqs_linkage *L)
 {
-    L->s.rounding = INFINITY;
+    L->s.rounding = L->s.rounding_rel = INFINITY;
     L->s.certified = 0;
 }

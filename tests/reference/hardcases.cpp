@@ -625,8 +625,11 @@ ExactErr exact_err(const std::vector<double> &x, const std::vector<double> &ref,
 }
 // The measure `metric` of the error x - ref over counted joints (all = true) or of ref over
 // the uncomputed joints (all = false: what the bound claims).
+// Which joints' errors a measure sums: every counted joint, the uncomputed ones alone (their
+// true values: a solve returns 0 there), or the computed ones alone (what the solver computed).
+enum Over { kAll, kSkipped, kComputed };
 double measure(int metric, const std::vector<double> &x, const std::vector<double> &ref,
-               const JointSlots &js, const std::vector<int32_t> &computed, bool all) {
+               const JointSlots &js, const std::vector<int32_t> &computed, Over over) {
     double s2 = 0, mx = 0, n2 = 0, nm = 0;
     for (size_t j = 0; j < js.off.size(); ++j) {
         if (!js.counted[j]) continue;
@@ -634,10 +637,12 @@ double measure(int metric, const std::vector<double> &x, const std::vector<doubl
         n2 += r * r;
         nm = std::max(nm, r);
         double e;
-        if (all)
+        if (over == kAll || (over == kComputed && computed[j]))
             e = jdiff(x, ref, js.off[j], js.nv[j]);
-        else
+        else if (over == kSkipped)
             e = computed[j] ? 0.0 : r;
+        else
+            e = 0.0;
         s2 += e * e;
         mx = std::max(mx, e);
     }
@@ -703,7 +708,7 @@ double ref_scale(int metric, const std::vector<double> &ref, const JointSlots &j
     std::vector<int32_t> none(js.off.size(), 0);
     std::vector<double> zero(ref.size(), 0.0);
     if (metric == AQS_METRIC_ABS_LINKAGE || metric == AQS_METRIC_ABS_JOINT)
-        return measure(metric, zero, ref, js, none, true);  // ||ref|| in that norm
+        return measure(metric, zero, ref, js, none, kAll);  // ||ref|| in that norm
     return 1.0;
 }
 
@@ -1020,7 +1025,7 @@ int main(int argc, char **argv) {
             double worst = 0;
             int fails = 0, bad_status = 0, with_bound = 0;
             const double scale = ref_scale(metric, ref, js);
-            const double aba_meas = measure(metric, qdd_aba, ref, js, computed, true);
+            const double aba_meas = measure(metric, qdd_aba, ref, js, computed, kAll);
             const double allowance = kAdaptiveRounding * std::max(aba_meas, kErrFloor * scale);
             for (int e = 0; e < 5; ++e) {
                 aqs_status s = aqs_linkage_set_tolerance(c.l, metric, kEps[e]);
@@ -1028,14 +1033,15 @@ int main(int argc, char **argv) {
                 aqs_solve_stats stats;
                 std::memset(&stats, 0, sizeof stats);
                 stats.size = sizeof stats;
-                double tru = NAN, skip = NAN;
+                double tru = NAN, skip = NAN, comp = NAN;
                 std::string msg;
                 if (s == AQS_OK) {
                     aqs_linkage_get_stats(c.l, &stats);
                     aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
                     for (size_t j = 0; j < md.joints.size(); ++j) aqs_joint_get_computed(c.l, (int32_t)j, &computed[j]);
-                    tru = measure(metric, qdd, ref, js, computed, true);
-                    skip = measure(metric, qdd, ref, js, computed, false);
+                    tru = measure(metric, qdd, ref, js, computed, kAll);
+                    skip = measure(metric, qdd, ref, js, computed, kSkipped);
+                    comp = measure(metric, qdd, ref, js, computed, kComputed);
                     // Worst true/bound over the solves that skipped joints (bound > 0); a
                     // solve that computed every joint (bound 0) is judged by the allowance.
                     if (stats.error_bound > 0) {
@@ -1068,14 +1074,15 @@ int main(int argc, char **argv) {
                     std::fprintf(json,
                                  "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"adaptive\",\"metric\":%s,"
                                  "\"eps\":%s,\"status\":%d,\"message\":%s,\"error_bound\":%s,\"true\":%s,"
-                                 "\"skip\":%s,\"computed\":%d,\"counted\":%d,\"holds\":%s,\"allowance\":%s,\"ok\":%s,"
-                                 "\"known_bad\":%s}\n",
+                                 "\"skip\":%s,\"comp\":%s,\"computed\":%d,\"counted\":%d,\"holds\":%s,\"allowance\":%s,"
+                                 "\"rounding_bound\":%s,\"certified\":%d,\"path\":%d,\"rfb\":%d,\"scale\":%s,\"ok\":%s,\"known_bad\":%s}\n",
                                  jstr(sp.name).c_str(), jstr(sp.family).c_str(), md.nv,
                                  jstr(kMetricName[metric]).c_str(), jnum(kEps[e]).c_str(), s, jstr(msg).c_str(),
                                  jnum(stats.error_bound).c_str(), jnum(tru).c_str(), jnum(skip).c_str(),
-                                 stats.computed_joints, stats.counted_joints,
+                                 jnum(comp).c_str(), stats.computed_joints, stats.counted_joints,
                                  s == AQS_OK && tru <= stats.error_bound ? "true" : "false",
-                                 jnum(allowance).c_str(), ok ? "true" : "false",
+                                 jnum(allowance).c_str(), jnum(stats.rounding_bound).c_str(), stats.certified,
+                                 stats.path, stats.rounding_fallback, jnum(scale).c_str(), ok ? "true" : "false",
                                  kb && kb->adaptive ? "true" : "false");
             }
             char b[64];
@@ -1088,6 +1095,9 @@ int main(int argc, char **argv) {
         // Bound truth: at every eps = 2^-e (e = 1..30) and the exact DCA (eps = 0), for all four
         // measures: true <= error_bound + rounding_bound, or certified == 0; on the benign
         // families certified must be 1 (else the check could pass trivially).
+        // The rounding fallback is off here and in the world measures below: they validate the
+        // adaptive solver's own estimate, which the fallback would replace by exact solves.
+        aqs_linkage_set_rounding_fallback(c.l, 0.0);
         for (int metric = 0; metric < 4 && md.nv <= 100000 && (!long_mode || sweep_long); ++metric) {
             BoundTally &bt = g_bound[sp.family];
             // The unrefined DCA back-substitution's true error in this measure (what the adaptive
@@ -1103,7 +1113,7 @@ int main(int argc, char **argv) {
                 if (aqs_linkage_set_tolerance(c.l, metric, 0.0) == AQS_OK && aqs_linkage_solve(c.l) == AQS_OK) {
                     aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
                     for (size_t j = 0; j < md.joints.size(); ++j) aqs_joint_get_computed(c.l, (int32_t)j, &computed[j]);
-                    dca_true = measure(metric, qdd, ref, js, computed, true);
+                    dca_true = measure(metric, qdd, ref, js, computed, kAll);
                 }
                 aqs_linkage_set_max_computed(c.l, 0);
                 aqs_linkage_set_exact_refinement(c.l, AQS_REFINEMENT_MAX);
@@ -1122,7 +1132,7 @@ int main(int argc, char **argv) {
                 aqs_linkage_get_stats(c.l, &stats);
                 aqs_linkage_get_accelerations(c.l, qdd.data(), qdd.size());
                 for (size_t j = 0; j < md.joints.size(); ++j) aqs_joint_get_computed(c.l, (int32_t)j, &computed[j]);
-                const double tru = measure(metric, qdd, ref, js, computed, true);
+                const double tru = measure(metric, qdd, ref, js, computed, kAll);
                 const double total = stats.error_bound + stats.rounding_bound;
                 const bool holds = tru <= total * (1 + 1e-9);
                 ++(e == 0 ? bt.exact : bt.solves);
@@ -1266,6 +1276,7 @@ int main(int argc, char **argv) {
             aqs_linkage_set_tolerance(c.l, AQS_METRIC_REL_JOINT, 0.0);
             aqs_linkage_set_auto(c.l, 1);
         }
+        aqs_linkage_set_rounding_fallback(c.l, AQS_ROUNDING_FALLBACK_LEVEL);
         if (kb_checks > 0)
             verdict(kb_fails == 0, true,
                     sp.name + " adaptive: " + std::to_string(kb_fails) + " of " + std::to_string(kb_checks) +

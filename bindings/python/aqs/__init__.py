@@ -77,6 +77,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
                    EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN, REFINEMENT_MAX,
+                   ROUNDING_FALLBACK_LEVEL,
                    PATH_ADAPTIVE, PATH_EXACT_ABA, PATH_EXACT_DCA,
                    DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE,
@@ -98,6 +99,7 @@ __all__ = [
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
     "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN", "REFINEMENT_MAX",
+    "ROUNDING_FALLBACK_LEVEL",
     "PATH_ADAPTIVE", "PATH_EXACT_ABA", "PATH_EXACT_DCA",
     "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
@@ -190,6 +192,8 @@ class SolveStats:
         honest bound can be given: the rounding exceeds eps, a near-singular
         pivot, the "phi" DCA form, or an exact solve by the articulated-body
         algorithm (which does not estimate its rounding).
+    rounding_fallback: True if the solve was exact because of
+        set_rounding_fallback.
     """
 
     metric: str
@@ -209,6 +213,7 @@ class SolveStats:
     cost_exact: float = 0.0
     rounding_bound: float = 0.0
     certified: bool = False
+    rounding_fallback: bool = False
 
     @classmethod
     def _from_c(cls, c):
@@ -220,7 +225,8 @@ class SolveStats:
                    factors_updated=int(c.factors_updated),
                    path=_lib.PATH_NAMES.get(c.path, str(c.path)), auto_chosen=bool(c.auto_chosen),
                    cost_adaptive=float(c.cost_adaptive), cost_exact=float(c.cost_exact),
-                   rounding_bound=float(c.rounding_bound), certified=bool(c.certified))
+                   rounding_bound=float(c.rounding_bound), certified=bool(c.certified),
+                   rounding_fallback=bool(c.rounding_fallback))
 
 
 def version():
@@ -906,6 +912,25 @@ class Linkage:
         """The fraction of set_exact_fallback (0.0: off)."""
         value = ctypes.c_double()
         self._call("aqs_linkage_get_exact_fallback", ctypes.byref(value))
+        return value.value
+
+    def set_rounding_fallback(self, level):
+        """Rounding fallback (aqs_linkage_set_rounding_fallback; on by
+        default at aqs.ROUNDING_FALLBACK_LEVEL = 1e-9): when an adaptive solve
+        that skips joints estimates its rounding (SolveStats.rounding_bound),
+        relative to the solution's size in the measure, above level (or
+        cannot estimate it), that solve and the next aqs.FALLBACK_RUN are
+        exact, by the articulated-body algorithm (SolveStats.rounding_fallback
+        is True, error_bound 0). level >= 0; 0 turns it off. Square-root DCA
+        form only; inactive with a cap or eps = 0. Any phase."""
+        f = "aqs_linkage_set_rounding_fallback"
+        self._call(f, _number(level, f, "level"))
+
+    @property
+    def rounding_fallback(self):
+        """The level of set_rounding_fallback (0.0: off)."""
+        value = ctypes.c_double()
+        self._call("aqs_linkage_get_rounding_fallback", ctypes.byref(value))
         return value.value
 
     def set_prediction(self, margin):

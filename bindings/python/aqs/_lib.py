@@ -99,6 +99,8 @@ EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tre
 # Exact solves after an adaptive solve that computed more than the fallback
 # fraction of the joints (aqs_linkage_set_exact_fallback).
 FALLBACK_RUN = 15
+# The rounding fallback's default level (AQS_ROUNDING_FALLBACK_LEVEL).
+ROUNDING_FALLBACK_LEVEL = 1e-9
 
 # Most corrections of an exact DCA solve, and the default (AQS_REFINEMENT_MAX).
 REFINEMENT_MAX = 3
@@ -201,6 +203,7 @@ class aqs_solve_stats(ctypes.Structure):
         ("cost_exact", ctypes.c_double),      # and of the exact path
         ("rounding_bound", ctypes.c_double),  # estimate of what the DCA's rounding adds (inf: none)
         ("certified", ctypes.c_int32),        # 1: error_bound + rounding_bound is a bound, <= eps
+        ("rounding_fallback", ctypes.c_int32),  # 1 if exact because of the rounding fallback
     ]
 
 
@@ -384,6 +387,8 @@ PROTOTYPES = {
     "aqs_linkage_get_dca_form": (status_t, [linkage_p, int32_p]),
     "aqs_linkage_set_exact_fallback": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
+    "aqs_linkage_set_rounding_fallback": (status_t, [linkage_p, ctypes.c_double]),
+    "aqs_linkage_get_rounding_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_prediction": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_prediction": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_auto": (status_t, [linkage_p, ctypes.c_int32]),
