@@ -123,10 +123,13 @@ static void check_bounds(aqs_linkage *L, tally *t, double abs_floor)
      * skip joints compute them: eps = 0 with a cap of every joint. The
      * refinement stays off for the sweep: error_bound is about skipping
      * (the DCA's own answer); a sweep solve that computes every joint would
-     * otherwise be refined (tests/test_refine.c tests that) */
+     * otherwise be refined (tests/test_refine.c tests that). So does the
+     * rounding fallback: on the hard cases it would answer with the ABA
+     * (test_refine.c test_rounding_fallback) */
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_max_computed(L, L->njoints + 1), AQS_OK);
     assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     assert_int_equal(aqs_linkage_set_max_computed(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(L, exact, (size_t)nv), AQS_OK);
@@ -157,6 +160,7 @@ static void check_bounds(aqs_linkage *L, tally *t, double abs_floor)
                 t->worst_ratio = err / st.error_bound;
         }
     assert_int_equal(aqs_linkage_set_exact_refinement(L, AQS_REFINEMENT_MAX), AQS_OK);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, AQS_ROUNDING_FALLBACK_LEVEL), AQS_OK);
     free(exact);
     free(approx);
 }
