@@ -328,6 +328,52 @@ def test_exact_fallback():
         assert not any(L.solve().fallback for _ in range(2 * aqs.FALLBACK_RUN))
 
 
+def _altmass_chain(n, ratio):
+    """n revolute links hanging under gravity, masses alternating 1 and ratio
+    (the hard-case suite's altmass family), at fixed angles."""
+    L = aqs.Linkage()
+    parent = aqs.WORLD
+    for i in range(n):
+        m = ratio if i % 2 else 1.0
+        b = L.add_body(m, (0.5, 0, 0), np.diag([0.01 * m, 0.1 * m, 0.1 * m]))
+        L.add_joint("revolute", parent, b, pos=(1.0 if i else 0.0, 0, 0),
+                    axis=(0, 1, 0) if i % 2 else (0, 0, 1))
+        parent = b
+    L.finalize()
+    L.set_positions(0.4 * np.sin(np.arange(n) * 1.7))
+    L.set_gravity((9.81, 0, 0))
+    return L
+
+
+def test_rounding_fallback():
+    """set_rounding_fallback (on by default): at mass ratio 1e9 an adaptive
+    solve that skips joints estimates its rounding far above the level, so
+    the solve is exact by the articulated-body algorithm (the same
+    accelerations as an exact solve); with the level 0 the adaptive solver
+    answers and its estimate is above the default level; bad levels raise and
+    change nothing."""
+    with _altmass_chain(60, 1e9) as L:
+        L.set_auto(False)
+        L.solve()
+        acc = L.accelerations()
+        assert L.rounding_fallback == aqs.ROUNDING_FALLBACK_LEVEL == 1e-9
+        for bad in (float("nan"), float("inf"), -1.0):
+            with pytest.raises(aqs.InvalidArgument, match="level"):
+                L.set_rounding_fallback(bad)
+        assert L.rounding_fallback == 1e-9
+        L.set_tolerance("rel_joint", 0.5)
+        stats = L.solve()
+        assert stats.rounding_fallback and stats.path == "exact_aba" and stats.error_bound == 0.0
+        assert stats.computed_joints == stats.counted_joints
+        assert np.array_equal(L.accelerations(), acc)
+        L.set_rounding_fallback(0.0)
+        assert L.rounding_fallback == 0.0
+        stats = L.solve()
+        assert not stats.rounding_fallback and stats.path == "adaptive"
+        assert stats.computed_joints < stats.counted_joints
+        assert stats.rounding_bound > 1e3 * aqs.ROUNDING_FALLBACK_LEVEL
+
+
 @pytest.mark.parametrize("metric", METRICS)
 @pytest.mark.parametrize("name", ["chain-300-tip-load", "tree-200-floating-local-load"])
 def test_prediction(name, metric):
