@@ -58,6 +58,13 @@ static aqs_linkage *molecule(uint64_t seed)
         }
     }
     if (aqs_linkage_finalize(L) != AQS_OK) fail_msg("finalize: %s", aqs_linkage_last_error(L));
+    /* The rounding fallback off: these tests are about the cost model. This
+     * backbone is a straight chain of ~1,300 bonds of 1.5 m along z, and the
+     * rounding estimate carries the handle forces' errors down lever arms
+     * of up to 2 km: 1.4e-7 .. 2e-7 relative (the DCA is 1.5e-13 from the
+     * ABA here), above the fallback's level (test_refine.c
+     * test_rounding_fallback, docs/math.md §10a) */
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
     return L;
 }
 
