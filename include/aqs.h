@@ -561,15 +561,16 @@ AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, do
  *  estimate itself for the relative measures, and over the DCA's 2-norm of
  *  the joint accelerations (abs_linkage), its largest computed joint
  *  acceleration (abs_joint) or its lower bound on the bodies' largest
- *  acceleration (abs_world). Default AQS_ROUNDING_FALLBACK_LEVEL (1e-9:
- *  above every benign case of the hard-case suite by 25x, below every case
- *  whose adaptive solve was less accurate than the ABA's error allows by 50x,
- *  docs/hardcases.md); 0 turns it off. Only in the square-root DCA form (the
+ *  acceleration (abs_world). Default AQS_ROUNDING_FALLBACK_LEVEL (1e-8:
+ *  above every benign case of the hard-case suite by 270x and the
+ *  benchmark scenes by 400x, below every case whose adaptive solve was less
+ *  accurate than the ABA's error allows by 5.7x, docs/math.md §10a); 0
+ *  turns it off. Only in the square-root DCA form (the
  *  other has no estimate); inactive with a cap or eps = 0; the exact fallback
  *  takes precedence. Setting it, a tolerance or a cap starts over with an
  *  adaptive solve. Any phase. Returns AQS_OK, AQS_EINVAL (level not finite
  *  or < 0; nothing changed). */
-#define AQS_ROUNDING_FALLBACK_LEVEL 1e-9
+#define AQS_ROUNDING_FALLBACK_LEVEL 1e-8
 AQS_API aqs_status aqs_linkage_set_rounding_fallback(aqs_linkage *linkage, double level);
 /** The level of aqs_linkage_set_rounding_fallback into *level. Returns
  *  AQS_OK, AQS_EINVAL (NULL). */

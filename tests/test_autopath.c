@@ -61,9 +61,9 @@ static aqs_linkage *molecule(uint64_t seed)
     /* The rounding fallback off: these tests are about the cost model. This
      * backbone is a straight chain of ~1,300 bonds of 1.5 m along z, and the
      * rounding estimate carries the handle forces' errors down lever arms
-     * of up to 2 km: 1.4e-7 .. 2e-7 relative (the DCA is 1.5e-13 from the
-     * ABA here), above the fallback's level (test_refine.c
-     * test_rounding_fallback, docs/math.md §10a) */
+     * of up to 2 km: 1.1e-9 .. 1.4e-9 relative (the DCA is 1.5e-13 from the
+     * ABA here), 7x below the fallback's level (docs/math.md §10a): too
+     * close for a test whose choices count every solve */
     assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
     return L;
 }

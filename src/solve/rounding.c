@@ -10,10 +10,9 @@
  *        tiny base makes it large) + the square root of the children's mass
  *        ratio (heavy and light parts in one factor: their rows' norms go
  *        like 1/sqrt(mass), docs/math.md 4a);
- *   rkb  the absolute error of b (units of u, any handle): carried through
- *        beta = X b^A_k - b^B_k and b_C = b_o + X1 E beta + X2 K2^T Sd Q,
- *        each term with its own absolute error and the sum's cancellation
- *        (sum_error; largest term / result, from the terms' actual norms);
+ *   rkb  of b: carried through beta = X b^A_k - b^B_k and through
+ *        b_C = b_o + X1 E beta + X2 K2^T Sd Q with their cancellation ratios
+ *        (largest term / result, from the terms' actual norms);
  *   rerho, regam: absolute errors of rho = -U beta + G2 Q and
  *        gamma = W beta + U^T Q, F u max(rk, level of beta) times their
  *        entrywise product sums.
@@ -23,9 +22,9 @@
  * x_h|); the child's handle k inherits f's error, the others keep theirs. The
  * joint's acceleration qdd = rho - QX x then has
  *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|,
- * F = RND_SAFETY. A carried error grows by a cancellation ratio r only past
+ * F = RND_SAFETY. A carried level grows by a cancellation ratio r only past
  * RND_R0 (terms of similar size that combine do not all err the same way);
- * the sum's own rounding adds RND_G0 times its largest term. A first-order estimate with a safety
+ * the sum's own rounding adds RND_G0 r. A first-order estimate with a safety
  * factor, not a theorem: tests/reference/hardcases.cpp checks it against the
  * quad reference on every family at every eps 2^-1 .. 2^-30. */
 #include "rounding.h"
@@ -51,38 +50,44 @@ static double n6(const double *v)
 {
     return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
 }
-/* The largest handle b of node c (2-norm of a handle's 6 entries). */
-static double bmax(const tree *t, const node *c)
+/* max(1, terms / result): the growth of a relative error through a sum */
+static double ratio(double terms, double result)
 {
-    const double *b = t->data + c->bv;
-    double m = 0.0;
-    int32_t h;
-    for (h = 0; h < c->nh; h++) m = maxd(m, n6(b + 6 * h));
-    return m;
+    if (!(terms > 0.0)) return 1.0;
+    if (!(result > 0.0)) return INFINITY;
+    return maxd(1.0, terms / result);
+}
+/* A level k carried through a sum with cancellation ratio r: the sum's own
+ * rounding adds RND_G0 r; the carried error grows by r only where r exceeds
+ * RND_R0 (terms of comparable size that combine are not a cancellation: the
+ * errors of a sum of a few terms do not all add up in the same direction). */
+static double carry(double k, double r) { return k * maxd(1.0, r / RND_R0) + RND_G0 * r; }
+
+/* The level of a sum's carried error: its terms' levels weighted by their
+ * norms (a term that is 0 or tiny brings its error, not its level: a
+ * grounded handle's b is rounding noise of level 1e17 whose error is
+ * 1e-19); 1 when every term is 0. */
+static double wlevel(const double *k, const double *a, int n)
+{
+    double num = 0.0, den = 0.0;
+    int i;
+    for (i = 0; i < n; i++)
+        if (a[i] > 0.0) {
+            num += k[i] * a[i];
+            den += a[i];
+        }
+    return den > 0.0 ? num / den : 1.0;
 }
 
-/* A child's level k of its reduced factors, and eb, the absolute error of
- * its b (any handle) in units of u. */
-static void child_levels(const tree *t, const node *c, double *k, double *eb)
+static void child_levels(const tree *t, const node *c, double *k, double *kb)
 {
     if (c->joint >= 0) {
         *k = RN(t, c)[RND_K];
-        *eb = RN(t, c)[RND_KB];
+        *kb = RN(t, c)[RND_KB];
     } else { /* a leaf: data, and b = I^-1 f rounded a few times */
         *k = 1.0;
-        *eb = RND_G0 * bmax(t, c);
+        *kb = RND_G0;
     }
-}
-
-/* The absolute error (units of u) of a sum whose largest term has norm T
- * and whose result has norm R, the terms carrying the absolute errors c
- * between them: the carried errors relative to the terms, grown by the
- * cancellation T / R only past RND_R0 (carry, in absolute terms), plus the
- * sum's own rounding. 0 when every term is 0. */
-static double sum_error(double c, double T, double R)
-{
-    if (!(T > 0.0)) return c;
-    return c / T * maxd(R, T / RND_R0) + RND_G0 * T;
 }
 
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
@@ -95,11 +100,11 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
     const double *FX = t->data + nd_W(C), *bC = t->data + C->bv, *bB = t->data + B->bv;
     const double fu = RND_SAFETY * RND_U;
-    double kA, kB, ebA, ebB, kappa, eb, ebeta, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], ebk[6];
+    double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
 
-    child_levels(t, A, &kA, &ebA);
-    child_levels(t, B, &kB, &ebB);
+    child_levels(t, A, &kA, &kbA);
+    child_levels(t, B, &kB, &kbB);
     if (!Lc) {
         g += gpiv;
     } else if (c > 0) {
@@ -118,24 +123,20 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
     }
     kappa = maxd(kA, kB) + g;
-    /* beta = X b^A_k - b^B_k, each term with its child's absolute error: a
-     * child whose b is tiny (a grounded handle's is rounding noise) passes
-     * on a tiny error, not its large relative level */
+    /* beta = X b^A_k - b^B_k: the children's levels weighted by their terms */
     bn = n6(beta);
     for (i = 0; i < 6; i++) xa[i] = beta[i] + bB[6 * C->kb + i];
     {
-        const double na = n6(xa), nb = n6(bB + 6 * C->kb), T = maxd(na, nb);
-        ebeta = sum_error(ebA + ebB, T, bn);
-        /* its level as the products with beta see it (at least the factors') */
-        kbeta = bn > 0.0 ? maxd(ebeta / bn, kappa) : kappa;
+        const double lv[2] = {kbA, kbB}, nt[2] = {n6(xa), n6(bB + 6 * C->kb)};
+        kbeta = maxd(carry(wlevel(lv, nt, 2), ratio(maxd(nt[0], nt[1]), bn)), kappa);
     }
     /* b_C(h) = b_o(h) + X1E_h beta + X2_h K2^T Sd Q with X1 E = -FX^T: the
-     * three terms' norms (the last as b_C - b_o - X1E_h beta), b_o with its
-     * child's error, X1E_h beta at beta's level, the rest at the factors' */
-    eb = 0.0;
+     * three terms' norms (the last as b_C - b_o - X1E_h beta), b_o at its
+     * child's level, the others at beta's and the factors' */
+    kb = 1.0;
     for (h = 0; h < C->nh; h++) {
         const double *bch = bC + 6 * h, *boh = bo + 6 * h;
-        double v[6], w[6], no, nv, nw;
+        double v[6], w[6], lv[3], nt[3];
         for (i = 0; i < 6; i++) {
             const int32_t o = 6 * h + i;
             const double *fx = FX + o;
@@ -143,11 +144,13 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
                      fx[4 * orows] * beta[4] + fx[5 * orows] * beta[5]);
             w[i] = bch[i] - boh[i] - v[i];
         }
-        no = n6(boh);
-        nv = n6(v);
-        nw = n6(w);
-        eb = maxd(eb, sum_error((h < A->nh - 1 ? ebA : ebB) + maxd(kbeta, kappa) * nv + kappa * nw,
-                                maxd(maxd(no, nv), nw), n6(bch)));
+        lv[0] = h < A->nh - 1 ? kbA : kbB;
+        lv[1] = kbeta;
+        lv[2] = kappa;
+        nt[0] = n6(boh);
+        nt[1] = n6(v);
+        nt[2] = n6(w);
+        kb = maxd(kb, carry(maxd(wlevel(lv, nt, 3), kappa), ratio(maxd(maxd(nt[0], nt[1]), nt[2]), n6(bch))));
     }
     /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
     for (i = 0; i < d; i++) {
@@ -160,7 +163,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         for (k = 0; k < c; k++) {
             double a = 0.0;
             for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
-            ebk[k] = a;
+            eb[k] = a;
         }
 #ifdef RND_SSE2
         { /* two j at a time, each sum as below; sgam summed in j's order */
@@ -169,7 +172,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
                 __m128d a = _mm_setzero_pd();
                 double a2[2];
                 for (k = 0; k < c; k++)
-                    a = _mm_add_pd(a, _mm_mul_pd(_mm_and_pd(_mm_loadu_pd(E + 6 * k + j), ab), _mm_set1_pd(ebk[k])));
+                    a = _mm_add_pd(a, _mm_mul_pd(_mm_and_pd(_mm_loadu_pd(E + 6 * k + j), ab), _mm_set1_pd(eb[k])));
                 for (i = 0; i < d; i++)
                     a = _mm_add_pd(a, _mm_and_pd(_mm_mul_pd(_mm_loadu_pd(U + 6 * i + j), _mm_set1_pd(Q[i])), ab));
                 _mm_storeu_pd(a2, a);
@@ -180,7 +183,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
 #else
         for (j = 0; j < 6; j++) {
             double a = 0.0;
-            for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * ebk[k];
+            for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
             for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
             sgam += a * a;
         }
@@ -195,20 +198,8 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     }
     RN(t, C)[RND_RHO] = fu * kbeta * sqrt(srho);
     RN(t, C)[RND_GAM] = fu * kbeta * sqrt(sgam);
-    if (!(bn > 0.0) && ebeta > 0.0) {
-        /* beta came out 0 from terms that carry errors: the products above
-         * do not see them; U and W = E^T E (or W) carry them as they are */
-        double su = 0.0, sw = 0.0;
-        for (i = 0; i < 6 * d; i++) su += U[i] * U[i];
-        if (E)
-            for (i = 0; i < 6 * c; i++) sw += E[i] * E[i];
-        else
-            for (i = 0; i < 36; i++) sw += W[i] * W[i];
-        RN(t, C)[RND_RHO] += fu * ebeta * sqrt(su);
-        RN(t, C)[RND_GAM] += fu * ebeta * (E ? sw : sqrt(sw));
-    }
     RN(t, C)[RND_K] = kappa;
-    RN(t, C)[RND_KB] = eb;
+    RN(t, C)[RND_KB] = kb;
     {
         double sub = RN(t, C)[RND_RHO];
         if (A->joint >= 0) sub = maxd(sub, RN(t, A)[RND_SUB]);

@@ -356,11 +356,11 @@ def test_rounding_fallback():
         L.set_auto(False)
         L.solve()
         acc = L.accelerations()
-        assert L.rounding_fallback == aqs.ROUNDING_FALLBACK_LEVEL == 1e-9
+        assert L.rounding_fallback == aqs.ROUNDING_FALLBACK_LEVEL == 1e-8
         for bad in (float("nan"), float("inf"), -1.0):
             with pytest.raises(aqs.InvalidArgument, match="level"):
                 L.set_rounding_fallback(bad)
-        assert L.rounding_fallback == 1e-9
+        assert L.rounding_fallback == 1e-8
         L.set_tolerance("rel_joint", 0.5)
         stats = L.solve()
         assert stats.rounding_fallback and stats.path == "exact_aba" and stats.error_bound == 0.0

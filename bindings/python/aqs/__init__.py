@@ -916,7 +916,7 @@ class Linkage:
 
     def set_rounding_fallback(self, level):
         """Rounding fallback (aqs_linkage_set_rounding_fallback; on by
-        default at aqs.ROUNDING_FALLBACK_LEVEL = 1e-9): when an adaptive solve
+        default at aqs.ROUNDING_FALLBACK_LEVEL = 1e-8): when an adaptive solve
         that skips joints estimates its rounding (SolveStats.rounding_bound),
         relative to the solution's size in the measure, above level (or
         cannot estimate it), that solve and the next aqs.FALLBACK_RUN are

@@ -100,7 +100,7 @@ EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tre
 # fraction of the joints (aqs_linkage_set_exact_fallback).
 FALLBACK_RUN = 15
 # The rounding fallback's default level (AQS_ROUNDING_FALLBACK_LEVEL).
-ROUNDING_FALLBACK_LEVEL = 1e-9
+ROUNDING_FALLBACK_LEVEL = 1e-8
 
 # Most corrections of an exact DCA solve, and the default (AQS_REFINEMENT_MAX).
 REFINEMENT_MAX = 3
