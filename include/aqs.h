@@ -559,14 +559,15 @@ AQS_API aqs_status aqs_linkage_get_exact_fallback(const aqs_linkage *linkage, do
  *  report error_bound 0, every joint computed, path AQS_PATH_EXACT_ABA and
  *  aqs_solve_stats.rounding_fallback = 1. The relative size is the
  *  estimate itself for the relative measures, and over the DCA's 2-norm of
- *  the joint accelerations (abs_linkage), its largest computed joint
- *  acceleration (abs_joint) or its lower bound on the bodies' largest
- *  acceleration (abs_world). Default AQS_ROUNDING_FALLBACK_LEVEL (1e-8:
+ *  the joint accelerations (abs_linkage) or its largest computed joint
+ *  acceleration (abs_joint). Default AQS_ROUNDING_FALLBACK_LEVEL (1e-8:
  *  above every benign case of the hard-case suite by 270x and the
  *  benchmark scenes by 400x, below every case whose adaptive solve was less
  *  accurate than the ABA's error allows by 5.7x, docs/math.md §10a); 0
  *  turns it off. Only in the square-root DCA form (the
- *  other has no estimate); inactive with a cap or eps = 0; the exact fallback
+ *  other has no estimate) and under the four joint measures (the world
+ *  measures' estimate is 1e4 .. 2e7 times the truth, too loose to decide
+ *  by); inactive with a cap or eps = 0; the exact fallback
  *  takes precedence. Setting it, a tolerance or a cap starts over with an
  *  adaptive solve. Any phase. Returns AQS_OK, AQS_EINVAL (level not finite
  *  or < 0; nothing changed). */

@@ -488,8 +488,9 @@ static void test_rest(void **state)
  * steps), then the adaptive solver is tried again. With the level 0 the
  * same solve skips joints and reports that estimate (> the default level:
  * the test of the trigger can fail). A benign random tree (the hard-case
- * suite's benign families estimate at most 4e-11) and the inverse-inertia
- * form (no estimate) never fall back; bad levels are rejected. */
+ * suite's benign families estimate at most 4e-11), the world measures and
+ * the inverse-inertia form (no estimate) never fall back; bad levels are
+ * rejected. */
 static void test_rounding_fallback(void **state)
 {
     aqs_linkage *L = altmass(100, 1e9, 0, 5), *X = altmass(100, 1e9, 0, 5), *P;
@@ -569,6 +570,12 @@ static void test_rounding_fallback(void **state)
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
     assert_int_equal(st.rounding_fallback, 0);
+    /* the world measures: never (their estimate is too loose to decide by) */
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_WORLD, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 0);
+    assert_int_equal(st.path, AQS_PATH_ADAPTIVE);
     aqs_linkage_destroy(L);
     aqs_linkage_destroy(X);
     /* the inverse-inertia form: no estimate, never a fallback */

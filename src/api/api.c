@@ -769,11 +769,13 @@ static int fallback_applies(const aqs_linkage *L)
 }
 
 /* The rounding fallback applies to adaptive solves (eps > 0, no cap) in the
- * square-root form, the one whose rounding is estimated. */
+ * square-root form, the one whose rounding is estimated, under the joint
+ * measures (the world measures' estimate is 1e4 .. 2e7 times the truth:
+ * too loose to decide by). */
 static int rounding_fallback_applies(const aqs_linkage *L)
 {
     return L->rfb_level > 0.0 && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0 &&
-           L->dca_form == AQS_DCA_FORM_SQRT;
+           L->dca_form == AQS_DCA_FORM_SQRT && L->s.metric < AQS_METRIC_ABS_WORLD;
 }
 
 /* After an adaptive solve that skipped joints: its estimated rounding,
