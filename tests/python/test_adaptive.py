@@ -626,8 +626,9 @@ def test_solve_stats_fields_and_types():
     names = ["metric", "eps", "error_bound", "computed_joints", "counted_joints",
              "nodes_updated", "nodes_processed", "capped", "fallback", "nodes_predicted",
              "factors_updated", "path", "auto_chosen", "cost_adaptive", "cost_exact",
-             "rounding_bound", "certified"]
-    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float, float, bool]
+             "rounding_bound", "certified", "rounding_fallback"]
+    types = [str, float, float, int, int, int, int, bool, bool, int, int, str, bool, float, float, float, bool,
+             bool]
     fields = dataclasses.fields(aqs.SolveStats)
     assert [f.name for f in fields] == names
     assert [f.type for f in fields] in (types, [t.__name__ for t in types])
@@ -664,7 +665,7 @@ def test_stats_struct_size_is_honoured():
                                            fallback=-7, nodes_predicted=-7, factors_updated=-7,
                                            path=-7, auto_chosen=-7, cost_adaptive=-7.0,
                                            cost_exact=-7.0, rounding_bound=-7.0,
-                                           certified=-7)
+                                           certified=-7, rounding_fallback=-7)
             assert _lib.lib.aqs_linkage_get_stats(handle, partial) == aqs.OK
             assert partial.size == size
             for name, _ in _lib.aqs_solve_stats._fields_[1:]:

@@ -93,7 +93,8 @@ def test_prototypes_match(header):
 
 
 def test_constants_match(header):
-    defines = dict(re.findall(r"#define\s+(AQS_\w+)\s+\(?(-?\d+)\)?", header))
+    # integer and floating literals whole (AQS_PREDICTION_MARGIN 1024.0, AQS_ROUNDING_FALLBACK_LEVEL 1e-8)
+    defines = dict(re.findall(r"#define\s+(AQS_\w+)\s+\(?(-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\)?", header))
     assert int(defines["AQS_VERSION_MAJOR"]) == _lib.VERSION_MAJOR
     for name, value in defines.items():
         if name.startswith("AQS_VERSION"):
@@ -109,7 +110,7 @@ def test_constants_match(header):
             assert aqs.JOINT_KINDS[short[len("JOINT_"):].lower()] == int(value), name
         if short.startswith("METRIC_"):
             assert aqs.METRICS[short[len("METRIC_"):].lower()] == int(value), name
-        assert getattr(aqs, short) == int(value), name
+        assert getattr(aqs, short) == float(value), name
     codes = {int(v) for k, v in defines.items()
              if k in ("AQS_OK",) or (k.startswith("AQS_E") and not k.startswith("AQS_EXACT_"))}
     assert codes == set(_lib.STATUS_NAMES)
