@@ -174,10 +174,9 @@ REG_FLOORS = (1e-10, 1e-16)
 # panda and talos_left_arm failed.
 # Since 2026-12-03 the 1e-10 floors pass (asserted); at 1e-16 the exact DCA (GMRES-refined)
 # is within the ABA's error (2.6e-13, 4.0e-16), but 1 and 3 of the 12 adaptive solves that
-# skip joints exceed their bound by more than 10x the ABA's error (not certified there).
-KNOWN_BAD_REGULARIZED = {
-    "icub.urdf+reg1e-16", "icub_reduced.urdf+reg1e-16",
-}
+# skip joints exceeded their bound by more than 10x the ABA's error (not certified there).
+# Since the rounding fallback (2026-12-03) those solves are the ABA's: 0 problems, asserted.
+KNOWN_BAD_REGULARIZED = set()
 
 
 def _regularize(path, out, floor):
