@@ -53,8 +53,11 @@
  * pseudo-random), the residual that rounding the answer to doubles alone
  * leaves. A GMRES cycle whose residual went from at most FLOOR_FACTOR floors
  * to at most FLOOR_FACTOR floors is kept when it converged by its estimate:
- * there the residual cannot tell a better answer from a worse one. */
-#define FLOOR_FACTOR 4.0
+ * there the residual cannot tell a better answer from a worse one (altmass
+ * 1e9 at 10^4 links: residuals 3.4e4 and 4.5e4 at a floor of 3.5e4 for
+ * errors 1.2e-12 and 8e-16). 4 rejected such a cycle at 2,000 links (1,765
+ * against a floor of 439). */
+#define FLOOR_FACTOR 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -346,7 +349,7 @@ static double rounding_floor(aqs_linkage *L, const double *q)
 void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
-    double rn, *tmp, floor = -1.0;
+    double rn, *tmp, rfloor = -1.0;
     int32_t cycle, nv = L->nv, kept = 0, current = 1;
     int done = 0;
     L->s.refined = 0;
@@ -368,8 +371,8 @@ void refine_exact(aqs_linkage *L)
         if (k > 1 && done && !(rn1 < rn) && est <= LATER_DROP * rn) {
             /* a converged Krylov cycle that did not lower the residual: kept
              * only where both residuals are at the rounding floor */
-            if (floor < 0.0) floor = rounding_floor(L, R->q1);
-            at_floor = rn <= FLOOR_FACTOR * floor && rn1 <= FLOOR_FACTOR * floor;
+            if (rfloor < 0.0) rfloor = rounding_floor(L, R->q1);
+            at_floor = rn <= FLOOR_FACTOR * rfloor && rn1 <= FLOOR_FACTOR * rfloor;
         }
         /* kept only when the residual went down, or it cannot tell (above) */
         if (!(rn1 < rn || at_floor)) break;
@@ -387,7 +390,7 @@ void refine_exact(aqs_linkage *L)
     if (kept) {
         /* the joint forces of the refined accelerations: the last residual's
          * when it was the kept one */
-        if (!current) (void)residual_eval(L, L->qdd, R->r2);
+        if (!current || rfloor >= 0.0) (void)residual_eval(L, L->qdd, R->r2); /* rounding_floor overwrote its scratch */
         residual_forces(L, L->cforce);
         if (L->m.nwelded > 0) aba_welded_forces(L);
     }
