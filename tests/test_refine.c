@@ -302,7 +302,7 @@ static void test_altmass_gmres(void **state)
  * and is kept because it converged by its estimate. The refined exact DCA
  * within 1e-14 of the ABA (relative 2-norm; the ABA is ~5e-16 from a
  * __float128 reference on this family at 1,000 and 10^4 links, hardcases),
- * measured 4.1e-16 .. 6.7e-16 (55 .. 82 steps); before the restarts (20 steps, one cycle)
+ * measured 5.4e-16 .. 6.7e-16 (55 .. 56 steps); before the restarts (20 steps, one cycle)
  * 1.2e-9 .. 1.2e-8. Seed 2 with bodies welded on. */
 static void test_altmass_restart(void **state)
 {
@@ -324,7 +324,7 @@ static void test_altmass_restart(void **state)
         assert_true(L->s.refined > 20);
         assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-14);
         /* forces: as test_altmass_gmres (the two double answers agree; no
-         * extended-precision reference of the forces), measured 2.2e-8 .. 6.2e-8
+         * extended-precision reference of the forces), measured 2.2e-8 .. 2.9e-8
          * (1.8e-9 .. 2.9e-9 at 1,000 links: they grow with the chain's load) */
         assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 2e-7);
         free(qa), free(qd), free(fa), free(fd);

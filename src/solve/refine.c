@@ -48,6 +48,14 @@
  * its starting residual: that residual sits at its rounding floor (below),
  * where the step sizes do not tell the stall from convergence. */
 #define RESTART_GAP 100.0
+/* ... and only when its iterate qdd + Z y summed terms |z_l y_l| above
+ * RESTART_SUM u ||qdd||_inf (max norms): the directions z_l carry the DCA's
+ * relative error on their loads, so a combination that cancels that much
+ * carries it amplified. Measured (3 solves each, 2026-12-03): altmass 1e6 at
+ * 1,000 links 5.7e5 .. 1.3e6 (a restart gained nothing: 2.4e-16 either way,
+ * at 2.6x the cost), ratio 1e9 at 100 links 7.3e8 .. 2.2e9, at 1,000 links
+ * 8.0e9 .. 2.7e11, at 10^4 links 4.0e9 .. 3.6e10. */
+#define RESTART_SUM 1e8
 #define LATER_DROP 1e-8
 /* The residual's rounding floor: ||M d|| with d_i = +-u |qdd_i| (signs
  * pseudo-random), the residual that rounding the answer to doubles alone
@@ -228,8 +236,10 @@ static int resolved(double dmax, double qmax, int32_t step)
  * residual is at the rounding floor, where P r is small whatever the error:
  * altmass 1e9 at 10^4 links, 2.6e2 u against an error of 1.2e-12). *est is
  * GMRES's estimate of the last iterate's residual (rn for the plain
- * correction). Returns the steps taken (0: none usable). */
-static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, double *est)
+ * correction), *sum the largest sum of |z_l y_l| over the joints in the last
+ * iterate, relative to ||q1||_inf (0 for the plain correction). Returns the
+ * steps taken (0: none usable). */
+static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, double *est, double *sum)
 {
     struct refine *R = L->rf;
     const int32_t nv = L->nv;
@@ -238,11 +248,12 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
     int32_t i, j, l, k = 0;
     g[0] = rn;
     *est = rn;
+    *sum = 0.0;
     for (j = 0; j < KRYLOV_MAX; j++) {
         /* the basis is allocated at the first step that needs it: no
          * arithmetic on its NULL pointer before that */
         double *vj = NULL, *w = NULL, *zj = NULL;
-        double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
+        double nw = 0.0, den, dmax = 0.0, qmax = 0.0, smax = 0.0;
         int rep;
         if (j > 0 && j + 1 > R->kcap && krylov_alloc(L, KRYLOV_MAX) != 0) break;
         if (j > 0) {
@@ -311,14 +322,20 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
             y[l] = s / h[l][l];
         }
         for (i = 0; i < nv; i++) { /* q1 = qdd + Z y, and how far it moved */
-            double d = 0.0;
-            for (l = 0; l <= j; l++) d += R->z[(size_t)l * snv + i] * y[l];
+            double d = 0.0, sa = 0.0;
+            for (l = 0; l <= j; l++) {
+                const double t = R->z[(size_t)l * snv + i] * y[l];
+                d += t;
+                sa += fabs(t);
+            }
+            smax = fmax(smax, sa);
             dmax = fmax(dmax, fabs(d - (j ? R->q1[i] - L->qdd[i] : 0.0)));
             R->q1[i] = L->qdd[i] + d;
             qmax = fmax(qmax, fabs(R->q1[i]));
         }
         k = j + 1;
         *est = fabs(g[j + 1]);
+        *sum = qmax > 0.0 ? smax / qmax : 0.0;
         if ((resolved(dmax, qmax, j || cycle) && (cycle == 0 || *est <= LATER_DROP * rn)) ||
             nw == 0.0) { /* nw = 0: the exact solution is in the space */
             *done = 1;
@@ -361,9 +378,9 @@ void refine_exact(aqs_linkage *L)
     if (!isfinite(rn) || rn == 0.0) return;
     save_loads(L, 0);
     for (cycle = 0; cycle < L->refine_max && !done; cycle++) {
-        double rn1, est;
+        double rn1, est, sum;
         int at_floor = 0;
-        const int32_t k = gmres_cycle(L, rn, cycle, &done, &est);
+        const int32_t k = gmres_cycle(L, rn, cycle, &done, &est, &sum);
         if (k == 0) break;
         rn1 = residual_eval(L, R->q1, R->r2); /* the true residual */
         current = 0;
@@ -377,8 +394,9 @@ void refine_exact(aqs_linkage *L)
         /* kept only when the residual went down, or it cannot tell (above) */
         if (!(rn1 < rn || at_floor)) break;
         /* a Krylov cycle whose true residual is far above its estimate lost
-         * the Arnoldi relation: restart from the true residual */
-        if (k > 1 && !at_floor && rn1 > RESTART_GAP * est) done = 0;
+         * the Arnoldi relation: restart from the true residual, if its
+         * iterate cancelled enough for that to matter (RESTART_SUM) */
+        if (k > 1 && !at_floor && rn1 > RESTART_GAP * est && sum > RESTART_SUM * 1.1102230246251565e-16) done = 0;
         memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
