@@ -13,6 +13,9 @@
  * refinement diverges; so the corrections are the steps of GMRES on
  * M dq = r right-preconditioned by DCA^-1 (GMRES-IR, Carson & Higham 2018),
  * whose first step is the plain correction, taken as it is when resolved.
+ * A Krylov cycle whose iterate lost the Arnoldi relation is followed by
+ * another from the true residual; one that converged is kept where the
+ * residual is at its rounding floor and cannot tell (FLOOR_FACTOR).
  *
  * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
  * out bit for bit the same, the positions being unchanged; rho, gamma and b
@@ -74,8 +77,8 @@ struct refine {
     double *dq;     /* nv: the correction */
     double *q1;     /* nv: the candidate */
     double *df;     /* 6 njoints: the correction's joint forces (not used after) */
-    double *v;      /* (KRYLOV_MAX + 1) nv: the Krylov basis of M P (orthonormal) */
-    double *z;      /* KRYLOV_MAX nv: P v_j, the preconditioned directions */
+    double *v;      /* (kcap + 1) nv: the Krylov basis of M P (orthonormal) */
+    double *z;      /* kcap nv: P v_j, the preconditioned directions */
     int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
 };
 
