@@ -13,6 +13,9 @@
  * refinement diverges; so the corrections are the steps of GMRES on
  * M dq = r right-preconditioned by DCA^-1 (GMRES-IR, Carson & Higham 2018),
  * whose first step is the plain correction, taken as it is when resolved.
+ * A Krylov cycle whose iterate lost the Arnoldi relation is followed by
+ * another from the true residual; one that converged is kept where the
+ * residual is at its rounding floor and cannot tell (FLOOR_FACTOR).
  *
  * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
  * out bit for bit the same, the positions being unchanged; rho, gamma and b
@@ -37,8 +40,35 @@
 #define REFINE_LEVEL 1024.0
 #define REFINE_LEVEL_LATER 64.0
 /* Krylov steps of one GMRES cycle at most (each one correction solve, one
- * node pass): altmass r = 1e9 at 1000 links takes 18. */
-#define KRYLOV_MAX 20
+ * node pass): altmass r = 1e9 at 1000 links takes 18, at 10^4 links 103
+ * then 104. The basis is allocated for KRYLOV_FIRST steps, grown to
+ * KRYLOV_MAX at the first cycle that needs more. */
+#define KRYLOV_FIRST 20
+#define KRYLOV_MAX 128
+/* A cycle after the first (restarted because its predecessor's true
+ * residual was more than RESTART_GAP times GMRES's estimate: the Arnoldi
+ * relation was lost) stops only once its estimate is below LATER_DROP times
+ * its starting residual: that residual sits at its rounding floor (below),
+ * where the step sizes do not tell the stall from convergence. */
+#define RESTART_GAP 100.0
+/* ... and only when its iterate qdd + Z y summed terms |z_l y_l| above
+ * RESTART_SUM u ||qdd||_inf (max norms): the directions z_l carry the DCA's
+ * relative error on their loads, so a combination that cancels that much
+ * carries it amplified. Measured (3 solves each, 2026-12-03): altmass 1e6 at
+ * 1,000 links 5.7e5 .. 1.3e6 (a restart gained nothing: 2.4e-16 either way,
+ * at 2.6x the cost), ratio 1e9 at 100 links 7.3e8 .. 2.2e9, at 1,000 links
+ * 8.0e9 .. 2.7e11, at 10^4 links 4.0e9 .. 3.6e10. */
+#define RESTART_SUM 1e8
+#define LATER_DROP 1e-8
+/* The residual's rounding floor: ||M d|| with d_i = +-u |qdd_i| (signs
+ * pseudo-random), the residual that rounding the answer to doubles alone
+ * leaves. A GMRES cycle whose residual went from at most FLOOR_FACTOR floors
+ * to at most FLOOR_FACTOR floors is kept when it converged by its estimate:
+ * there the residual cannot tell a better answer from a worse one (altmass
+ * 1e9 at 10^4 links: residuals 3.4e4 and 4.5e4 at a floor of 3.5e4 for
+ * errors 1.2e-12 and 8e-16). 4 rejected such a cycle at 2,000 links (1,765
+ * against a floor of 439). */
+#define FLOOR_FACTOR 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -47,8 +77,9 @@ struct refine {
     double *dq;     /* nv: the correction */
     double *q1;     /* nv: the candidate */
     double *df;     /* 6 njoints: the correction's joint forces (not used after) */
-    double *v;      /* (KRYLOV_MAX + 1) nv: the Krylov basis of M P (orthonormal) */
-    double *z;      /* KRYLOV_MAX nv: P v_j, the preconditioned directions */
+    double *v;      /* (kcap + 1) nv: the Krylov basis of M P (orthonormal) */
+    double *z;      /* kcap nv: P v_j, the preconditioned directions */
+    int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
 };
 
 void refine_free(aqs_linkage *L)
@@ -96,21 +127,34 @@ static int refine_alloc(aqs_linkage *L)
     return 0;
 }
 
-/* The Krylov basis, at the first solve whose first correction is not
- * resolved (benign linkages never hold it). Returns 0, or -1 when out of
- * memory: that cycle is then the plain correction alone. */
-static int krylov_alloc(aqs_linkage *L)
+/* The Krylov basis for steps steps, at the first solve whose first
+ * correction is not resolved (benign linkages never hold it), grown (its
+ * contents kept) at the first cycle that needs more. Returns 0, or -1 when
+ * out of memory (the basis as it was): that cycle then stops where it is
+ * (the plain correction alone, if there is no basis). */
+static int krylov_alloc(aqs_linkage *L, int32_t steps)
 {
     struct refine *R = L->rf;
-    const size_t nv = (size_t)L->nv + 1;
-    if (R->v) return 0;
-    R->v = lk_calloc_in(L, LK_MEM_DCA, (KRYLOV_MAX + 1) * nv, sizeof(double));
-    R->z = lk_calloc_in(L, LK_MEM_DCA, KRYLOV_MAX * nv, sizeof(double));
-    if (R->v && R->z) return 0;
-    lk_free(L, R->v);
-    lk_free(L, R->z);
-    R->v = R->z = NULL;
-    return -1;
+    const size_t nv = (size_t)L->nv + 1, old = (size_t)R->kcap;
+    double *v, *z;
+    if (R->kcap >= steps) return 0;
+    v = lk_calloc_in(L, LK_MEM_DCA, ((size_t)steps + 1) * nv, sizeof(double));
+    z = lk_calloc_in(L, LK_MEM_DCA, (size_t)steps * nv, sizeof(double));
+    if (!v || !z) {
+        lk_free(L, v);
+        lk_free(L, z);
+        return -1;
+    }
+    if (R->v) {
+        memcpy(v, R->v, (old + 1) * nv * sizeof(double));
+        memcpy(z, R->z, old * nv * sizeof(double));
+        lk_free(L, R->v);
+        lk_free(L, R->z);
+    }
+    R->v = v;
+    R->z = z;
+    R->kcap = steps;
+    return 0;
 }
 
 /* The load-dependent node values into R->save (dir 0) or back (dir 1). */
@@ -188,9 +232,17 @@ static int resolved(double dmax, double qmax, int32_t step)
  * not exactly linear. Arnoldi on M P by Gram-Schmidt applied twice, Givens
  * rotations for the small least-squares problem. After each step the iterate
  * qdd + Z y is formed in R->q1 (y minimizing the estimated residual); the
- * cycle stops once a step moved it by a resolved amount (*done set), or the
- * Krylov space is exhausted. Returns the steps taken (0: none usable). */
-static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
+ * cycle stops once a step moved it by a resolved amount (*done set; in a
+ * cycle after the first, also its estimate below LATER_DROP rn), or the
+ * Krylov space is exhausted. The first cycle's first step is the plain
+ * correction, taken as it is when resolved; a later cycle's is not (its
+ * residual is at the rounding floor, where P r is small whatever the error:
+ * altmass 1e9 at 10^4 links, 2.6e2 u against an error of 1.2e-12). *est is
+ * GMRES's estimate of the last iterate's residual (rn for the plain
+ * correction), *sum the largest sum of |z_l y_l| over the joints in the last
+ * iterate, relative to ||q1||_inf (0 for the plain correction). Returns the
+ * steps taken (0: none usable). */
+static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, double *est, double *sum)
 {
     struct refine *R = L->rf;
     const int32_t nv = L->nv;
@@ -198,12 +250,15 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
     double h[KRYLOV_MAX + 1][KRYLOV_MAX], cs[KRYLOV_MAX], sn[KRYLOV_MAX], g[KRYLOV_MAX + 1], y[KRYLOV_MAX];
     int32_t i, j, l, k = 0;
     g[0] = rn;
+    *est = rn;
+    *sum = 0.0;
     for (j = 0; j < KRYLOV_MAX; j++) {
         /* the basis is allocated at the first step that needs it: no
          * arithmetic on its NULL pointer before that */
         double *vj = NULL, *w = NULL, *zj = NULL;
-        double nw = 0.0, den, dmax = 0.0, qmax = 0.0;
+        double nw = 0.0, den, dmax = 0.0, qmax = 0.0, smax = 0.0;
         int rep;
+        if (j > 0 && j + 1 > R->kcap && krylov_alloc(L, KRYLOV_MAX) != 0) break;
         if (j > 0) {
             vj = R->v + (size_t)j * snv;
             w = R->v + (size_t)(j + 1) * snv;
@@ -219,7 +274,7 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
                 dmax = fmax(dmax, fabs(R->dq[i]));
                 qmax = fmax(qmax, fabs(R->q1[i]));
             }
-            if (resolved(dmax, qmax, 0) || krylov_alloc(L) != 0) {
+            if ((cycle == 0 && resolved(dmax, qmax, 0)) || krylov_alloc(L, KRYLOV_FIRST) != 0) {
                 *done = 1;
                 return 1;
             }
@@ -270,14 +325,22 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
             y[l] = s / h[l][l];
         }
         for (i = 0; i < nv; i++) { /* q1 = qdd + Z y, and how far it moved */
-            double d = 0.0;
-            for (l = 0; l <= j; l++) d += R->z[(size_t)l * snv + i] * y[l];
+            double d = 0.0, sa = 0.0;
+            for (l = 0; l <= j; l++) {
+                const double t = R->z[(size_t)l * snv + i] * y[l];
+                d += t;
+                sa += fabs(t);
+            }
+            smax = fmax(smax, sa);
             dmax = fmax(dmax, fabs(d - (j ? R->q1[i] - L->qdd[i] : 0.0)));
             R->q1[i] = L->qdd[i] + d;
             qmax = fmax(qmax, fabs(R->q1[i]));
         }
         k = j + 1;
-        if (resolved(dmax, qmax, j) || nw == 0.0) { /* nw = 0: the exact solution is in the space */
+        *est = fabs(g[j + 1]);
+        *sum = qmax > 0.0 ? smax / qmax : 0.0;
+        if ((resolved(dmax, qmax, j || cycle) && (cycle == 0 || *est <= LATER_DROP * rn)) ||
+            nw == 0.0) { /* nw = 0: the exact solution is in the space */
             *done = 1;
             break;
         }
@@ -285,10 +348,28 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int *done)
     return k;
 }
 
+/* The residual's rounding floor at q (see FLOOR_FACTOR): one product by M
+ * (R->dq and R->df as scratch; df holds 6 njoints >= nv). */
+static double rounding_floor(aqs_linkage *L, const double *q)
+{
+    struct refine *R = L->rf;
+    const double u = 1.1102230246251565e-16;
+    uint32_t seed = 12345u;
+    double f = 0.0;
+    int32_t i;
+    for (i = 0; i < L->nv; i++) {
+        seed = seed * 1664525u + 1013904223u;
+        R->dq[i] = (seed >> 31 ? u : -u) * fabs(q[i]);
+    }
+    residual_mass_mul(L, R->dq, R->df);
+    for (i = 0; i < L->nv; i++) f += R->df[i] * R->df[i];
+    return sqrt(f);
+}
+
 void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
-    double rn, *tmp;
+    double rn, *tmp, rfloor = -1.0;
     int32_t cycle, nv = L->nv, kept = 0, current = 1;
     int done = 0;
     L->s.refined = 0;
@@ -300,14 +381,25 @@ void refine_exact(aqs_linkage *L)
     if (!isfinite(rn) || rn == 0.0) return;
     save_loads(L, 0);
     for (cycle = 0; cycle < L->refine_max && !done; cycle++) {
-        double rn1;
-        const int32_t k = gmres_cycle(L, rn, &done);
+        double rn1, est, sum;
+        int at_floor = 0;
+        const int32_t k = gmres_cycle(L, rn, cycle, &done, &est, &sum);
         if (k == 0) break;
         rn1 = residual_eval(L, R->q1, R->r2); /* the true residual */
         current = 0;
-        /* kept only when finite (the residual of a non-finite candidate is
-         * not) and the residual went down */
-        if (!(isfinite(rn1) && rn1 < rn)) break;
+        if (!isfinite(rn1)) break; /* a non-finite candidate's residual is not finite */
+        if (k > 1 && done && !(rn1 < rn) && est <= LATER_DROP * rn) {
+            /* a converged Krylov cycle that did not lower the residual: kept
+             * only where both residuals are at the rounding floor */
+            if (rfloor < 0.0) rfloor = rounding_floor(L, R->q1);
+            at_floor = rn <= FLOOR_FACTOR * rfloor && rn1 <= FLOOR_FACTOR * rfloor;
+        }
+        /* kept only when the residual went down, or it cannot tell (above) */
+        if (!(rn1 < rn || at_floor)) break;
+        /* a Krylov cycle whose true residual is far above its estimate lost
+         * the Arnoldi relation: restart from the true residual, if its
+         * iterate cancelled enough for that to matter (RESTART_SUM) */
+        if (k > 1 && !at_floor && rn1 > RESTART_GAP * est && sum > RESTART_SUM * 1.1102230246251565e-16) done = 0;
         memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
@@ -319,7 +411,7 @@ void refine_exact(aqs_linkage *L)
     if (kept) {
         /* the joint forces of the refined accelerations: the last residual's
          * when it was the kept one */
-        if (!current) (void)residual_eval(L, L->qdd, R->r2);
+        if (!current || rfloor >= 0.0) (void)residual_eval(L, L->qdd, R->r2); /* rounding_floor overwrote its scratch */
         residual_forces(L, L->cforce);
         if (L->m.nwelded > 0) aba_welded_forces(L);
     }
