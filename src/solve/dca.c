@@ -5,6 +5,7 @@
 #include "dca.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dense.h"
@@ -22,11 +23,35 @@
 #include <emmintrin.h>
 #define DCA_SSE2 1
 #endif
+/* AVX (four doubles a register) for the hottest kernel, reflect_row's row updates:
+ * compiled for AVX by a function attribute whatever the build's flags, and run only
+ * where the processor has it (dca_avx_wanted, once per linkage in dca_enable). "avx",
+ * not "avx2" or "fma": no fused multiply-add, every lane rounds as the scalar code. */
+#if defined(DCA_SSE2) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define DCA_AVX 1
+#define DCA_TARGET_AVX __attribute__((target("avx")))
+#endif
 
 static int mp_inverse_factor(const double *mp, double *Y);
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
 
 static void dca_leaf_phi(aqs_linkage *L, int32_t n);
+
+/* Whether the AVX kernels run: the processor and the operating system support AVX
+ * (__builtin_cpu_supports: CPUID and XCR0), and the environment variable AQS_SIMD is not
+ * "sse2" (which forces the SSE2 kernels: make check-scalar compares the two paths and the
+ * scalar build; docs/testing.md). Both paths give the same results, bit for bit. */
+static int dca_avx_wanted(void)
+{
+#ifdef DCA_AVX
+    const char *e = getenv("AQS_SIMD");
+    if (e && strcmp(e, "sse2") == 0) return 0;
+    return __builtin_cpu_supports("avx") != 0;
+#else
+    return 0;
+#endif
+}
 
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
@@ -53,6 +78,7 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     if (frames_poses_alloc(L) != AQS_OK ||
         (L->dca_form == AQS_DCA_FORM_PHI && model_inverse_alloc(L) != AQS_OK)) /* dca_phi_leaf's Phi */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
+    t->avx = dca_avx_wanted();
     t->data = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
@@ -305,11 +331,112 @@ static inline void axpy4(double *a, double *b, double *g, double *h, double s, d
     }
 }
 
+#ifdef DCA_AVX
+/* axpy1 four entries at a time */
+DCA_TARGET_AVX static inline void axpy1_avx(double *a, double s, const double *v, int32_t m)
+{
+    const __m256d ss = _mm256_set1_pd(s);
+    int32_t j = 0;
+    for (; j + 3 < m; j += 4)
+        _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(ss, _mm256_loadu_pd(v + j))));
+    if (j + 1 < m) {
+        _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(ss), _mm_loadu_pd(v + j))));
+        j += 2;
+    }
+    if (j < m) a[j] -= s * v[j];
+}
+
+/* reflect_row_body's row updates (rows i .. nrows-1, f = 2 / v^T v) with AVX,
+ * each row's arithmetic that of the scalar loops: four rows' sums in the four
+ * lanes of one register, each summed in column order from 0.0 (a 4 x 4 block of
+ * the rows is transposed so that lane k meets row k's entries column by column),
+ * then multiplied by f and tested for zero as there; four entries of a row
+ * updated at once, a[j] - s v[j] in each lane. The two-row and one-row tails as
+ * in reflect_row_body (the one-row sum tested before its product by f). */
+DCA_TARGET_AVX static void reflect_apply_avx(double *A, int32_t ld, int32_t i, int32_t nrows, int32_t p,
+                                             const double *v, int32_t m, double f)
+{
+    __m256d vb[DCA_VDUP];
+    const __m256d ff = _mm256_set1_pd(f), zero = _mm256_setzero_pd();
+    int32_t j;
+    for (j = 0; j < m; j++) vb[j] = _mm256_set1_pd(v[j]);
+    for (; i + 3 < nrows; i += 4) {
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+        __m256d acc = zero;
+        double s[4];
+        for (j = 0; j + 3 < m; j += 4) {
+            const __m256d ra = _mm256_loadu_pd(a + j), rb = _mm256_loadu_pd(b + j), rg = _mm256_loadu_pd(g + j),
+                          rh = _mm256_loadu_pd(h + j);
+            const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+            const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t0, t2, 0x20), vb[j])); /* (a0 b0 g0 h0) */
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t1, t3, 0x20), vb[j + 1]));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t0, t2, 0x31), vb[j + 2]));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t1, t3, 0x31), vb[j + 3]));
+        }
+        for (; j < m; j++) {
+            const __m128d lo = _mm_loadh_pd(_mm_load_sd(a + j), b + j), hi = _mm_loadh_pd(_mm_load_sd(g + j), h + j);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_insertf128_pd(_mm256_castpd128_pd256(lo), hi, 1), vb[j]));
+        }
+        acc = _mm256_mul_pd(acc, ff);
+        _mm256_storeu_pd(s, acc);
+        if (_mm256_movemask_pd(_mm256_cmp_pd(acc, zero, _CMP_EQ_OQ)) == 0) {
+            const __m256d sa = _mm256_broadcast_sd(s), sb = _mm256_broadcast_sd(s + 1), sg = _mm256_broadcast_sd(s + 2),
+                          sh = _mm256_broadcast_sd(s + 3);
+            for (j = 0; j + 3 < m; j += 4) {
+                const __m256d vv = _mm256_loadu_pd(v + j);
+                _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(sa, vv)));
+                _mm256_storeu_pd(b + j, _mm256_sub_pd(_mm256_loadu_pd(b + j), _mm256_mul_pd(sb, vv)));
+                _mm256_storeu_pd(g + j, _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(sg, vv)));
+                _mm256_storeu_pd(h + j, _mm256_sub_pd(_mm256_loadu_pd(h + j), _mm256_mul_pd(sh, vv)));
+            }
+            if (j + 1 < m) {
+                const __m128d vv = _mm_loadu_pd(v + j);
+                _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(sa), vv)));
+                _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(_mm256_castpd256_pd128(sb), vv)));
+                _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(_mm256_castpd256_pd128(sg), vv)));
+                _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(_mm256_castpd256_pd128(sh), vv)));
+                j += 2;
+            }
+            if (j < m) {
+                a[j] -= s[0] * v[j];
+                b[j] -= s[1] * v[j];
+                g[j] -= s[2] * v[j];
+                h[j] -= s[3] * v[j];
+            }
+        } else {
+            if (s[0] != 0.0) axpy1_avx(a, s[0], v, m);
+            if (s[1] != 0.0) axpy1_avx(b, s[1], v, m);
+            if (s[2] != 0.0) axpy1_avx(g, s[2], v, m);
+            if (s[3] != 0.0) axpy1_avx(h, s[3], v, m);
+        }
+    }
+    for (; i + 1 < nrows; i += 2) {
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, s, t;
+        __m128d acc = _mm_setzero_pd();
+        for (j = 0; j < m; j++)
+            acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), _mm256_castpd256_pd128(vb[j])));
+        acc = _mm_mul_pd(acc, _mm256_castpd256_pd128(ff));
+        _mm_storel_pd(&s, acc);
+        _mm_storeh_pd(&t, acc);
+        if (s != 0.0) axpy1_avx(a, s, v, m);
+        if (t != 0.0) axpy1_avx(b, t, v, m);
+    }
+    if (i < nrows) {
+        double *a = A + (int64_t)ld * i + p, s = 0.0;
+        for (j = 0; j < m; j++) s += a[j] * v[j];
+        if (s == 0.0) return;
+        s *= f;
+        axpy1_avx(a, s, v, m);
+    }
+}
+#endif
+
 /* Reflect row r of the row-major A (ld columns) so that its entries in
  * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
  * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
 static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
-                        int32_t ncol, double *v)
+                        int32_t ncol, double *v, int avx)
 {
     const double *x = A + (int64_t)ld * r + p;
     int32_t m = ncol - p, i, j;
@@ -366,6 +493,14 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
+#ifdef DCA_AVX
+    if (avx && m <= DCA_VDUP) {
+        reflect_apply_avx(A, ld, r0, nrows, p, v, m, f);
+        return;
+    }
+#else
+    (void)avx;
+#endif
 #ifdef DCA_SSE2
     if (m <= DCA_VDUP)
         for (j = 0; j < m; j++) vd[j] = _mm_set1_pd(v[j]);
@@ -449,9 +584,9 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
 }
 
 static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p, int32_t ncol,
-                        double *v)
+                        double *v, int avx)
 {
-    reflect_row_body(A, ld, r0, nrows, r, p, ncol, v);
+    reflect_row_body(A, ld, r0, nrows, r, p, ncol, v, avx);
 }
 
 /* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
@@ -1085,18 +1220,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 G[6 * i + j] = YA[6 * i + j];
                 G[6 * i + 3 + j] = YB[6 * i + j];
             }
-        reflect_row_body(G, 6, 0, 6, 0, 0, 6, vr);
-        reflect_row_body(G, 6, 1, 6, 1, 1, 6, vr);
-        reflect_row_body(G, 6, 2, 6, 2, 2, 6, vr);
+        reflect_row_body(G, 6, 0, 6, 0, 0, 6, vr, 0);
+        reflect_row_body(G, 6, 1, 6, 1, 1, 6, vr, 0);
+        reflect_row_body(G, 6, 2, 6, 2, 2, 6, vr, 0);
         for (i = 0; i < 3; i++)
             for (j = 0; j < 3; j++) {
                 H[9 * i + j] = i == j ? sA : 0.0;
                 H[9 * i + 3 + j] = G[6 * (3 + i) + 3 + j];
                 H[9 * i + 6 + j] = i == j ? sB : 0.0;
             }
-        reflect_row_body(H, 9, 0, 3, 0, 0, 9, vr);
-        reflect_row_body(H, 9, 1, 3, 1, 1, 9, vr);
-        reflect_row_body(H, 9, 2, 3, 2, 2, 9, vr);
+        reflect_row_body(H, 9, 0, 3, 0, 0, 9, vr, 0);
+        reflect_row_body(H, 9, 1, 3, 1, 1, 9, vr, 0);
+        reflect_row_body(H, 9, 2, 3, 2, 2, 9, vr, 0);
         memset(Lm, 0, sizeof Lm);
         for (i = 0; i < 3; i++)
             for (j = 0; j <= i; j++) Lm[6 * i + j] = G[6 * i + j];
@@ -1283,7 +1418,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     /* (the rows above q are reduced already: zero from column q on) */
-    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v);
+    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v, t->avx);
     {
         /* b of the outer handles, in C's handle order */
         double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
@@ -1302,7 +1437,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
-        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v);
+        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v, t->avx);
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
