@@ -236,14 +236,19 @@ $(HARDREF_SO): tests/reference/hardref_c.cpp tests/reference/hard_reference.hpp 
 check-hard: $(HARDCASES)
 	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick.jsonl
 	$(HARDCASES) --dca-form phi --json $(abspath $(BUILD))/hardcases-quick-phi.jsonl
-# The SSE2 kernels of src/solve/dca.c against their scalar code (docs/testing.md): the
-# library built again with __SSE2__ undefined (build/scalar) must give the same
-# hard-case JSON, byte for byte.
+	AQS_SIMD=sse2 $(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick-sse2.jsonl > /dev/null
+	cmp $(abspath $(BUILD))/hardcases-quick.jsonl $(abspath $(BUILD))/hardcases-quick-sse2.jsonl
+# The SIMD kernels of src/solve/dca.c against their scalar code (docs/testing.md): the
+# AVX kernels (where the processor has AVX), the SSE2 ones (AQS_SIMD=sse2: the path of a
+# processor without AVX) and the library built again with __SSE2__ undefined
+# (build/scalar) must give the same hard-case JSON, byte for byte.
 .PHONY: check-scalar
 check-scalar: $(HARDCASES)
 	$(MAKE) --no-print-directory BUILD=build/scalar CFLAGS_LIB="$(CFLAGS_LIB) -U__SSE2__" build/scalar/tests/reference/hardcases
-	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-sse2.jsonl > /dev/null
+	$(HARDCASES) --json $(abspath $(BUILD))/hardcases-simd.jsonl > /dev/null
+	AQS_SIMD=sse2 $(HARDCASES) --json $(abspath $(BUILD))/hardcases-sse2.jsonl > /dev/null
 	build/scalar/tests/reference/hardcases --json $(abspath $(BUILD))/hardcases-scalar.jsonl > /dev/null
+	cmp $(abspath $(BUILD))/hardcases-simd.jsonl $(abspath $(BUILD))/hardcases-sse2.jsonl
 	cmp $(abspath $(BUILD))/hardcases-sse2.jsonl $(abspath $(BUILD))/hardcases-scalar.jsonl
 bench-hard: $(HARDCASES)
 	@mkdir -p docs/hardcases
