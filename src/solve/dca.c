@@ -725,6 +725,61 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
  * products of reduced factors only, no large mobility subtracted from
  * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b; kq: w
  * scratch doubles. */
+#ifdef DCA_AVX
+#define DCA_AVX_W 24 /* jc_outer_avx: at most this many columns w */
+/* joint_coefficients' loop over the outer rows, four rows o .. o+3 at a time
+ * with AVX, the rows in the lanes: their entries transposed column by column
+ * (xc[k] = row o..o+3's entry k), then every sum of the scalar loop (FX, b_C,
+ * QX) in its order, lane by lane. Returns the first row left (orows is a
+ * multiple of 6: the last two rows when it is not a multiple of 4). */
+DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
+                                           int32_t w, const double *E, const double *Eb, const double *kq,
+                                           const double *Kp, const double *bo, double *FX, double *QX, double *bC)
+{
+    __m256d eb[36], ebb[6], kqb[DCA_AVX_W], kb[6 * DCA_AVX_W], xc[DCA_AVX_W];
+    int32_t o, i, k, r;
+    for (k = 0; k < c; k++) {
+        for (i = 0; i < 6; i++) eb[6 * k + i] = _mm256_set1_pd(E[6 * k + i]);
+        ebb[k] = _mm256_set1_pd(Eb[k]);
+    }
+    for (k = c; k < w; k++) kqb[k] = _mm256_set1_pd(kq[k - c]);
+    for (r = 0; r < d; r++)
+        for (k = c; k < w; k++) kb[DCA_AVX_W * r + k] = _mm256_set1_pd(Kp[(int64_t)r * ncol + k]);
+    for (o = 0; o + 3 < orows; o += 4) {
+        const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol, *x3 = x2 + ncol, *x4 = x3 + ncol;
+        __m256d sb;
+        for (k = 0; k + 3 < w; k += 4) {
+            const __m256d ra = _mm256_loadu_pd(x1 + k), rb = _mm256_loadu_pd(x2 + k), rg = _mm256_loadu_pd(x3 + k),
+                          rh = _mm256_loadu_pd(x4 + k);
+            const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb);
+            const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+            xc[k] = _mm256_permute2f128_pd(t0, t2, 0x20);
+            xc[k + 1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+            xc[k + 2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+            xc[k + 3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+        }
+        for (; k < w; k++)
+            xc[k] = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k)),
+                                         _mm_loadh_pd(_mm_load_sd(x3 + k), x4 + k), 1);
+        for (i = 0; i < 6; i++) {
+            __m256d f = _mm256_setzero_pd();
+            for (k = 0; k < c; k++) f = _mm256_sub_pd(f, _mm256_mul_pd(eb[6 * k + i], xc[k]));
+            _mm256_storeu_pd(FX + (int64_t)i * orows + o, f);
+        }
+        sb = _mm256_loadu_pd(bo + o);
+        for (k = 0; k < c; k++) sb = _mm256_add_pd(sb, _mm256_mul_pd(xc[k], ebb[k]));
+        for (k = c; k < w; k++) sb = _mm256_add_pd(sb, _mm256_mul_pd(xc[k], kqb[k]));
+        _mm256_storeu_pd(bC + o, sb);
+        for (r = 0; r < d; r++) {
+            __m256d x = _mm256_setzero_pd();
+            for (k = c; k < w; k++) x = _mm256_sub_pd(x, _mm256_mul_pd(kb[DCA_AVX_W * r + k], xc[k]));
+            _mm256_storeu_pd(QX + (int64_t)r * orows + o, x);
+        }
+    }
+    return o;
+}
+#endif
+
 static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
                               const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
                               const double beta[6], const double *Q, const double *bo, double *kq)
@@ -803,7 +858,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     /* two outer rows at a time (orows is a multiple of 6): E's rows two
      * entries at a time for FX, the two rows' b_C and QX sums in the two
      * lanes; every sum as in the scalar loops below, lane by lane */
-    for (o = 0; o < orows; o += 2) {
+    o = 0;
+#ifdef DCA_AVX
+    if (t->avx && w <= DCA_AVX_W) o = jc_outer_avx(X, ncol, orows, c, d, w, E, Eb, kq, Kp, bo, FX, QX, bC);
+#endif
+    for (; o < orows; o += 2) {
         const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol;
         __m128d sb = _mm_loadu_pd(bo + o);
         int32_t h;
