@@ -333,7 +333,7 @@ static inline void axpy4(double *a, double *b, double *g, double *h, double s, d
 
 #ifdef DCA_AVX
 /* axpy1 four entries at a time */
-DCA_TARGET_AVX static inline void axpy1_avx(double *a, double s, const double *v, int32_t m)
+DCA_TARGET_AVX static inline DCA_INLINE void axpy1_avx(double *a, double s, const double *v, int32_t m)
 {
     const __m256d ss = _mm256_set1_pd(s);
     int32_t j = 0;
@@ -353,8 +353,8 @@ DCA_TARGET_AVX static inline void axpy1_avx(double *a, double s, const double *v
  * then multiplied by f and tested for zero as there; four entries of a row
  * updated at once, a[j] - s v[j] in each lane. The two-row and one-row tails as
  * in reflect_row_body (the one-row sum tested before its product by f). */
-DCA_TARGET_AVX static void reflect_apply_avx(double *A, int32_t ld, int32_t i, int32_t nrows, int32_t p,
-                                             const double *v, int32_t m, double f)
+DCA_TARGET_AVX static inline DCA_INLINE void reflect_apply_avx_body(double *A, int32_t ld, int32_t i, int32_t nrows,
+                                                                     int32_t p, const double *v, int32_t m, double f)
 {
     __m256d vb[DCA_VDUP];
     const __m256d ff = _mm256_set1_pd(f), zero = _mm256_setzero_pd();
@@ -428,6 +428,22 @@ DCA_TARGET_AVX static void reflect_apply_avx(double *A, int32_t ld, int32_t i, i
         if (s == 0.0) return;
         s *= f;
         axpy1_avx(a, s, v, m);
+    }
+}
+
+/* the body at the molecule's lengths m as constants (its loops unrolled) */
+DCA_TARGET_AVX static void reflect_apply_avx(double *A, int32_t ld, int32_t i, int32_t nrows, int32_t p,
+                                             const double *v, int32_t m, double f)
+{
+    switch (m) {
+    case 4: reflect_apply_avx_body(A, ld, i, nrows, p, v, 4, f); break;
+    case 5: reflect_apply_avx_body(A, ld, i, nrows, p, v, 5, f); break;
+    case 6: reflect_apply_avx_body(A, ld, i, nrows, p, v, 6, f); break;
+    case 7: reflect_apply_avx_body(A, ld, i, nrows, p, v, 7, f); break;
+    case 8: reflect_apply_avx_body(A, ld, i, nrows, p, v, 8, f); break;
+    case 9: reflect_apply_avx_body(A, ld, i, nrows, p, v, 9, f); break;
+    case 10: reflect_apply_avx_body(A, ld, i, nrows, p, v, 10, f); break;
+    default: reflect_apply_avx_body(A, ld, i, nrows, p, v, m, f); break;
     }
 }
 #endif
