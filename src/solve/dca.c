@@ -34,7 +34,7 @@
 #endif
 
 static int mp_inverse_factor(const double *mp, double *Y);
-static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx);
 
 static void dca_leaf_phi(aqs_linkage *L, int32_t n);
 
@@ -676,13 +676,77 @@ static void complement(const double *S, int32_t d, double *Tc)
         for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
 }
 
+#ifdef DCA_AVX
+/* xform_cols with columns 0-3 in one AVX register and 4-5 in an SSE2 one,
+ * each entry's expression as in its scalar loop */
+DCA_TARGET_AVX static void xform_cols_avx(const pose *P, const double *Z, double *out, int32_t ld)
+{
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    const __m256d r0 = _mm256_set1_pd(R[0]), r1 = _mm256_set1_pd(R[1]), r2 = _mm256_set1_pd(R[2]),
+                  r3 = _mm256_set1_pd(R[3]), r4 = _mm256_set1_pd(R[4]), r5 = _mm256_set1_pd(R[5]),
+                  r6 = _mm256_set1_pd(R[6]), r7 = _mm256_set1_pd(R[7]), r8 = _mm256_set1_pd(R[8]);
+    const __m256d p0 = _mm256_set1_pd(p[0]), p1 = _mm256_set1_pd(p[1]), p2 = _mm256_set1_pd(p[2]);
+    {
+        const __m256d v0 = _mm256_loadu_pd(Z), v1 = _mm256_loadu_pd(Z + 6), v2 = _mm256_loadu_pd(Z + 12);
+        __m256d t0 = _mm256_loadu_pd(Z + 18), t1 = _mm256_loadu_pd(Z + 24), t2 = _mm256_loadu_pd(Z + 30);
+        if (moved) {
+            t0 = _mm256_sub_pd(t0, _mm256_sub_pd(_mm256_mul_pd(p1, v2), _mm256_mul_pd(p2, v1)));
+            t1 = _mm256_sub_pd(t1, _mm256_sub_pd(_mm256_mul_pd(p2, v0), _mm256_mul_pd(p0, v2)));
+            t2 = _mm256_sub_pd(t2, _mm256_sub_pd(_mm256_mul_pd(p0, v1), _mm256_mul_pd(p1, v0)));
+        }
+        _mm256_storeu_pd(out, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, v0), _mm256_mul_pd(r3, v1)), _mm256_mul_pd(r6, v2)));
+        _mm256_storeu_pd(out + ld, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, v0), _mm256_mul_pd(r4, v1)), _mm256_mul_pd(r7, v2)));
+        _mm256_storeu_pd(out + (int64_t)2 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, v0), _mm256_mul_pd(r5, v1)), _mm256_mul_pd(r8, v2)));
+        _mm256_storeu_pd(out + (int64_t)3 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, t0), _mm256_mul_pd(r3, t1)), _mm256_mul_pd(r6, t2)));
+        _mm256_storeu_pd(out + (int64_t)4 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, t0), _mm256_mul_pd(r4, t1)), _mm256_mul_pd(r7, t2)));
+        _mm256_storeu_pd(out + (int64_t)5 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, t0), _mm256_mul_pd(r5, t1)), _mm256_mul_pd(r8, t2)));
+    }
+    {
+#define DCA_LO(x) _mm256_castpd256_pd128(x)
+        const __m128d v0 = _mm_loadu_pd(Z + 4), v1 = _mm_loadu_pd(Z + 10), v2 = _mm_loadu_pd(Z + 16);
+        __m128d t0 = _mm_loadu_pd(Z + 22), t1 = _mm_loadu_pd(Z + 28), t2 = _mm_loadu_pd(Z + 34);
+        if (moved) {
+            t0 = _mm_sub_pd(t0, _mm_sub_pd(_mm_mul_pd(DCA_LO(p1), v2), _mm_mul_pd(DCA_LO(p2), v1)));
+            t1 = _mm_sub_pd(t1, _mm_sub_pd(_mm_mul_pd(DCA_LO(p2), v0), _mm_mul_pd(DCA_LO(p0), v2)));
+            t2 = _mm_sub_pd(t2, _mm_sub_pd(_mm_mul_pd(DCA_LO(p0), v1), _mm_mul_pd(DCA_LO(p1), v0)));
+        }
+        _mm_storeu_pd(out + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r0), v0), _mm_mul_pd(DCA_LO(r3), v1)),
+                                          _mm_mul_pd(DCA_LO(r6), v2)));
+        _mm_storeu_pd(out + ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r1), v0), _mm_mul_pd(DCA_LO(r4), v1)),
+                                               _mm_mul_pd(DCA_LO(r7), v2)));
+        _mm_storeu_pd(out + (int64_t)2 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r2), v0), _mm_mul_pd(DCA_LO(r5), v1)),
+                                                           _mm_mul_pd(DCA_LO(r8), v2)));
+        _mm_storeu_pd(out + (int64_t)3 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r0), t0), _mm_mul_pd(DCA_LO(r3), t1)),
+                                                           _mm_mul_pd(DCA_LO(r6), t2)));
+        _mm_storeu_pd(out + (int64_t)4 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r1), t0), _mm_mul_pd(DCA_LO(r4), t1)),
+                                                           _mm_mul_pd(DCA_LO(r7), t2)));
+        _mm_storeu_pd(out + (int64_t)5 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r2), t0), _mm_mul_pd(DCA_LO(r5), t1)),
+                                                           _mm_mul_pd(DCA_LO(r8), t2)));
+#undef DCA_LO
+    }
+}
+#endif
+
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
  * column by column: spatial_xform_motion's arithmetic, written out. */
-static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx)
 {
     const double *R = P->R, *p = P->p;
     const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
     int32_t j;
+#ifdef DCA_AVX
+    if (avx) {
+        xform_cols_avx(P, Z, out, ld);
+        return;
+    }
+#else
+    (void)avx;
+#endif
 #ifdef DCA_SSE2
     /* two columns at a time: each entry's expression as in the scalar loop below */
     const __m128d r0 = _mm_set1_pd(R[0]), r1 = _mm_set1_pd(R[1]), r2 = _mm_set1_pd(R[2]), r3 = _mm_set1_pd(R[3]),
@@ -1166,9 +1230,9 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         const double *bs = (a ? bA : bB) + 6 * src;
         double F6[36], L6[36], Q6[36], db[6];
         pose_compose(&Kin, &P[ci], &Ph); /* handle ci in K */
-        xform_cols(&Ph, a ? Za : Zb, F6, 6);
-        xform_cols(&Ph, a ? La : Lb, L6, 6);
-        xform_cols(&Ph, a ? Qa : Qb, Q6, 6);
+        xform_cols(&Ph, a ? Za : Zb, F6, 6, t->avx);
+        xform_cols(&Ph, a ? La : Lb, L6, 6, t->avx);
+        xform_cols(&Ph, a ? Qa : Qb, Q6, 6, t->avx);
         spatial_xform_motion(&Ph, a ? g : z, db);
         for (r = 0; r < 6; r++) {
             const int32_t o = 6 * ci + r;
@@ -1376,7 +1440,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     /* (M is not cleared: every entry the reflections and the coefficients read is
      * written below, the other side's columns of the outer rows as zeros; the
      * constraint and relative rows are read only in their first w columns) */
-    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol, t->avx);
     /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
         const double *la;
@@ -1409,7 +1473,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         ci++;
     }
     /* The relative acceleration across k (B's minus A's), in k's child frame. */
-    xform_cols(&PkbF, Lm, rel, ncol);
+    xform_cols(&PkbF, Lm, rel, ncol, t->avx);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
     for (j = 0; j < a6; j++) {
