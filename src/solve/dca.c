@@ -812,9 +812,10 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, 
  * (xc[k] = row o..o+3's entry k), then every sum of the scalar loop (FX, b_C,
  * QX) in its order, lane by lane. Returns the first row left (orows is a
  * multiple of 6: the last two rows when it is not a multiple of 4). */
-DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
-                                           int32_t w, const double *E, const double *Eb, const double *kq,
-                                           const double *Kp, const double *bo, double *FX, double *QX, double *bC)
+DCA_TARGET_AVX static inline DCA_INLINE int32_t jc_outer_avx_body(const double *X, int32_t ncol, int32_t orows,
+                                                                   int32_t c, int32_t d, int32_t w, const double *E,
+                                                                   const double *Eb, const double *kq, const double *Kp,
+                                                                   const double *bo, double *FX, double *QX, double *bC)
 {
     __m256d eb[36], ebb[6], kqb[DCA_AVX_W], kb[6 * DCA_AVX_W], xc[DCA_AVX_W];
     int32_t o, i, k, r;
@@ -857,6 +858,24 @@ DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_
         }
     }
     return o;
+}
+
+/* the body for a revolute or prismatic joint (c = 5, d = 1) at the molecule's widths w as constants */
+DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
+                                           int32_t w, const double *E, const double *Eb, const double *kq,
+                                           const double *Kp, const double *bo, double *FX, double *QX, double *bC)
+{
+    if (c == 5 && d == 1) switch (w) {
+        case 6: return jc_outer_avx_body(X, ncol, orows, 5, 1, 6, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 7: return jc_outer_avx_body(X, ncol, orows, 5, 1, 7, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 8: return jc_outer_avx_body(X, ncol, orows, 5, 1, 8, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 9: return jc_outer_avx_body(X, ncol, orows, 5, 1, 9, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 10: return jc_outer_avx_body(X, ncol, orows, 5, 1, 10, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 11: return jc_outer_avx_body(X, ncol, orows, 5, 1, 11, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 12: return jc_outer_avx_body(X, ncol, orows, 5, 1, 12, E, Eb, kq, Kp, bo, FX, QX, bC);
+        default: break;
+        }
+    return jc_outer_avx_body(X, ncol, orows, c, d, w, E, Eb, kq, Kp, bo, FX, QX, bC);
 }
 #endif
 
