@@ -255,7 +255,7 @@ check-scalar: $(HARDCASES)
 # kernels) and -cpu SandyBridge (AVX: the AVX kernels) must write the same JSON. Both
 # without FMA, so glibc's libm takes the same (non-FMA) variants in both: a native run on
 # an FMA processor differs from either in the last bits of the cases' set-up. Not in check
-# (~9 min); skipped without qemu-x86_64 (Debian: qemu-user) or on another processor.
+# (13 min at load 4); skipped without qemu-x86_64 (Debian: qemu-user) or on another processor.
 .PHONY: check-noavx
 check-noavx: $(HARDCASES)
 	@if [ "$$(uname -m)" = x86_64 ] && command -v qemu-x86_64 >/dev/null 2>&1; then \
