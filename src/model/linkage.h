@@ -95,6 +95,7 @@ typedef struct {
     int32_t *node_of_eff;  /* ne: the node whose principal joint it is */
     int32_t *leaf_of_comp; /* ncomp + 1 */
     int32_t height, max_handles;
+    int32_t avx; /* dca_enable: the AVX kernels of src/solve/dca.c (reflect_row) run (docs/math.md §4a) */
     double mean_handles;
     double *scratch;  /* 84 * (max_handles + 2) doubles */
     double *hscratch; /* (6 max_handles + 13) x (12 max_handles + 6): the stacked factor of

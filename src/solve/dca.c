@@ -5,6 +5,7 @@
 #include "dca.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dense.h"
@@ -22,11 +23,35 @@
 #include <emmintrin.h>
 #define DCA_SSE2 1
 #endif
+/* AVX (four doubles a register) for the hottest kernel, reflect_row's row updates:
+ * compiled for AVX by a function attribute whatever the build's flags, and run only
+ * where the processor has it (dca_avx_wanted, once per linkage in dca_enable). "avx",
+ * not "avx2" or "fma": no fused multiply-add, every lane rounds as the scalar code. */
+#if defined(DCA_SSE2) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define DCA_AVX 1
+#define DCA_TARGET_AVX __attribute__((target("avx")))
+#endif
 
 static int mp_inverse_factor(const double *mp, double *Y);
-static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld);
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx);
 
 static void dca_leaf_phi(aqs_linkage *L, int32_t n);
+
+/* Whether the AVX kernels run: the processor and the operating system support AVX
+ * (__builtin_cpu_supports: CPUID and XCR0), and the environment variable AQS_SIMD is not
+ * "sse2" (which forces the SSE2 kernels: make check-scalar compares the two paths and the
+ * scalar build; docs/testing.md). Both paths give the same results, bit for bit. */
+static int dca_avx_wanted(void)
+{
+#ifdef DCA_AVX
+    const char *e = getenv("AQS_SIMD");
+    if (e && strcmp(e, "sse2") == 0) return 0;
+    return __builtin_cpu_supports("avx") != 0;
+#else
+    return 0;
+#endif
+}
 
 aqs_status dca_enable(aqs_linkage *L, const char *fn)
 {
@@ -53,6 +78,7 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     if (frames_poses_alloc(L) != AQS_OK ||
         (L->dca_form == AQS_DCA_FORM_PHI && model_inverse_alloc(L) != AQS_OK)) /* dca_phi_leaf's Phi */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the assembly tree's poses or the inverse inertias", fn);
+    t->avx = dca_avx_wanted();
     t->data = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->ndata + 1, sizeof(double));
     if (!t->data)
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for %lld DCA coefficients", fn,
@@ -305,11 +331,128 @@ static inline void axpy4(double *a, double *b, double *g, double *h, double s, d
     }
 }
 
+#ifdef DCA_AVX
+/* axpy1 four entries at a time */
+DCA_TARGET_AVX static inline DCA_INLINE void axpy1_avx(double *a, double s, const double *v, int32_t m)
+{
+    const __m256d ss = _mm256_set1_pd(s);
+    int32_t j = 0;
+    for (; j + 3 < m; j += 4)
+        _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(ss, _mm256_loadu_pd(v + j))));
+    if (j + 1 < m) {
+        _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(ss), _mm_loadu_pd(v + j))));
+        j += 2;
+    }
+    if (j < m) a[j] -= s * v[j];
+}
+
+/* reflect_row_body's row updates (rows i .. nrows-1, f = 2 / v^T v) with AVX,
+ * each row's arithmetic that of the scalar loops: four rows' sums in the four
+ * lanes of one register, each summed in column order from 0.0 (a 4 x 4 block of
+ * the rows is transposed so that lane k meets row k's entries column by column),
+ * then multiplied by f and tested for zero as there; four entries of a row
+ * updated at once, a[j] - s v[j] in each lane. The two-row and one-row tails as
+ * in reflect_row_body (the one-row sum tested before its product by f). */
+DCA_TARGET_AVX static inline DCA_INLINE void reflect_apply_avx_body(double *A, int32_t ld, int32_t i, int32_t nrows,
+                                                                     int32_t p, const double *v, int32_t m, double f)
+{
+    __m256d vb[DCA_VDUP];
+    const __m256d ff = _mm256_set1_pd(f), zero = _mm256_setzero_pd();
+    int32_t j;
+    for (j = 0; j < m; j++) vb[j] = _mm256_set1_pd(v[j]);
+    for (; i + 3 < nrows; i += 4) {
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, *g = b + ld, *h = g + ld;
+        __m256d acc = zero;
+        double s[4];
+        for (j = 0; j + 3 < m; j += 4) {
+            const __m256d ra = _mm256_loadu_pd(a + j), rb = _mm256_loadu_pd(b + j), rg = _mm256_loadu_pd(g + j),
+                          rh = _mm256_loadu_pd(h + j);
+            const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+            const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t0, t2, 0x20), vb[j])); /* (a0 b0 g0 h0) */
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t1, t3, 0x20), vb[j + 1]));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t0, t2, 0x31), vb[j + 2]));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_permute2f128_pd(t1, t3, 0x31), vb[j + 3]));
+        }
+        for (; j < m; j++) {
+            const __m128d lo = _mm_loadh_pd(_mm_load_sd(a + j), b + j), hi = _mm_loadh_pd(_mm_load_sd(g + j), h + j);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_insertf128_pd(_mm256_castpd128_pd256(lo), hi, 1), vb[j]));
+        }
+        acc = _mm256_mul_pd(acc, ff);
+        _mm256_storeu_pd(s, acc);
+        if (_mm256_movemask_pd(_mm256_cmp_pd(acc, zero, _CMP_EQ_OQ)) == 0) {
+            const __m256d sa = _mm256_broadcast_sd(s), sb = _mm256_broadcast_sd(s + 1), sg = _mm256_broadcast_sd(s + 2),
+                          sh = _mm256_broadcast_sd(s + 3);
+            for (j = 0; j + 3 < m; j += 4) {
+                const __m256d vv = _mm256_loadu_pd(v + j);
+                _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(sa, vv)));
+                _mm256_storeu_pd(b + j, _mm256_sub_pd(_mm256_loadu_pd(b + j), _mm256_mul_pd(sb, vv)));
+                _mm256_storeu_pd(g + j, _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(sg, vv)));
+                _mm256_storeu_pd(h + j, _mm256_sub_pd(_mm256_loadu_pd(h + j), _mm256_mul_pd(sh, vv)));
+            }
+            if (j + 1 < m) {
+                const __m128d vv = _mm_loadu_pd(v + j);
+                _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(sa), vv)));
+                _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(_mm256_castpd256_pd128(sb), vv)));
+                _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(_mm256_castpd256_pd128(sg), vv)));
+                _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(_mm256_castpd256_pd128(sh), vv)));
+                j += 2;
+            }
+            if (j < m) {
+                a[j] -= s[0] * v[j];
+                b[j] -= s[1] * v[j];
+                g[j] -= s[2] * v[j];
+                h[j] -= s[3] * v[j];
+            }
+        } else {
+            if (s[0] != 0.0) axpy1_avx(a, s[0], v, m);
+            if (s[1] != 0.0) axpy1_avx(b, s[1], v, m);
+            if (s[2] != 0.0) axpy1_avx(g, s[2], v, m);
+            if (s[3] != 0.0) axpy1_avx(h, s[3], v, m);
+        }
+    }
+    for (; i + 1 < nrows; i += 2) {
+        double *a = A + (int64_t)ld * i + p, *b = a + ld, s, t;
+        __m128d acc = _mm_setzero_pd();
+        for (j = 0; j < m; j++)
+            acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(a + j), b + j), _mm256_castpd256_pd128(vb[j])));
+        acc = _mm_mul_pd(acc, _mm256_castpd256_pd128(ff));
+        _mm_storel_pd(&s, acc);
+        _mm_storeh_pd(&t, acc);
+        if (s != 0.0) axpy1_avx(a, s, v, m);
+        if (t != 0.0) axpy1_avx(b, t, v, m);
+    }
+    if (i < nrows) {
+        double *a = A + (int64_t)ld * i + p, s = 0.0;
+        for (j = 0; j < m; j++) s += a[j] * v[j];
+        if (s == 0.0) return;
+        s *= f;
+        axpy1_avx(a, s, v, m);
+    }
+}
+
+/* the body at the molecule's lengths m as constants (its loops unrolled) */
+DCA_TARGET_AVX static void reflect_apply_avx(double *A, int32_t ld, int32_t i, int32_t nrows, int32_t p,
+                                             const double *v, int32_t m, double f)
+{
+    switch (m) {
+    case 4: reflect_apply_avx_body(A, ld, i, nrows, p, v, 4, f); break;
+    case 5: reflect_apply_avx_body(A, ld, i, nrows, p, v, 5, f); break;
+    case 6: reflect_apply_avx_body(A, ld, i, nrows, p, v, 6, f); break;
+    case 7: reflect_apply_avx_body(A, ld, i, nrows, p, v, 7, f); break;
+    case 8: reflect_apply_avx_body(A, ld, i, nrows, p, v, 8, f); break;
+    case 9: reflect_apply_avx_body(A, ld, i, nrows, p, v, 9, f); break;
+    case 10: reflect_apply_avx_body(A, ld, i, nrows, p, v, 10, f); break;
+    default: reflect_apply_avx_body(A, ld, i, nrows, p, v, m, f); break;
+    }
+}
+#endif
+
 /* Reflect row r of the row-major A (ld columns) so that its entries in
  * columns p+1 .. ncol-1 vanish (Householder from the right, LAPACK-scaled),
  * applying the reflection to rows r0 .. nrows-1. v: ncol scratch doubles. */
 static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p,
-                        int32_t ncol, double *v)
+                        int32_t ncol, double *v, int avx)
 {
     const double *x = A + (int64_t)ld * r + p;
     int32_t m = ncol - p, i, j;
@@ -366,6 +509,14 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
     if (v[0] > 0.0) alpha = -alpha;
     v[0] -= alpha; /* |v0| = |x0| / scale + ||x|| / scale: no cancellation */
     f = -1.0 / (alpha * v[0]); /* 2 / v^T v, since v^T v = -2 alpha v0 */
+#ifdef DCA_AVX
+    if (avx && m <= DCA_VDUP) {
+        reflect_apply_avx(A, ld, r0, nrows, p, v, m, f);
+        return;
+    }
+#else
+    (void)avx;
+#endif
 #ifdef DCA_SSE2
     if (m <= DCA_VDUP)
         for (j = 0; j < m; j++) vd[j] = _mm_set1_pd(v[j]);
@@ -449,9 +600,9 @@ static inline DCA_INLINE void reflect_row_body(double *A, int32_t ld, int32_t r0
 }
 
 static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_t r, int32_t p, int32_t ncol,
-                        double *v)
+                        double *v, int avx)
 {
-    reflect_row_body(A, ld, r0, nrows, r, p, ncol, v);
+    reflect_row_body(A, ld, r0, nrows, r, p, ncol, v, avx);
 }
 
 /* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
@@ -525,13 +676,77 @@ static void complement(const double *S, int32_t d, double *Tc)
         for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
 }
 
+#ifdef DCA_AVX
+/* xform_cols with columns 0-3 in one AVX register and 4-5 in an SSE2 one,
+ * each entry's expression as in its scalar loop */
+DCA_TARGET_AVX static void xform_cols_avx(const pose *P, const double *Z, double *out, int32_t ld)
+{
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    const __m256d r0 = _mm256_set1_pd(R[0]), r1 = _mm256_set1_pd(R[1]), r2 = _mm256_set1_pd(R[2]),
+                  r3 = _mm256_set1_pd(R[3]), r4 = _mm256_set1_pd(R[4]), r5 = _mm256_set1_pd(R[5]),
+                  r6 = _mm256_set1_pd(R[6]), r7 = _mm256_set1_pd(R[7]), r8 = _mm256_set1_pd(R[8]);
+    const __m256d p0 = _mm256_set1_pd(p[0]), p1 = _mm256_set1_pd(p[1]), p2 = _mm256_set1_pd(p[2]);
+    {
+        const __m256d v0 = _mm256_loadu_pd(Z), v1 = _mm256_loadu_pd(Z + 6), v2 = _mm256_loadu_pd(Z + 12);
+        __m256d t0 = _mm256_loadu_pd(Z + 18), t1 = _mm256_loadu_pd(Z + 24), t2 = _mm256_loadu_pd(Z + 30);
+        if (moved) {
+            t0 = _mm256_sub_pd(t0, _mm256_sub_pd(_mm256_mul_pd(p1, v2), _mm256_mul_pd(p2, v1)));
+            t1 = _mm256_sub_pd(t1, _mm256_sub_pd(_mm256_mul_pd(p2, v0), _mm256_mul_pd(p0, v2)));
+            t2 = _mm256_sub_pd(t2, _mm256_sub_pd(_mm256_mul_pd(p0, v1), _mm256_mul_pd(p1, v0)));
+        }
+        _mm256_storeu_pd(out, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, v0), _mm256_mul_pd(r3, v1)), _mm256_mul_pd(r6, v2)));
+        _mm256_storeu_pd(out + ld, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, v0), _mm256_mul_pd(r4, v1)), _mm256_mul_pd(r7, v2)));
+        _mm256_storeu_pd(out + (int64_t)2 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, v0), _mm256_mul_pd(r5, v1)), _mm256_mul_pd(r8, v2)));
+        _mm256_storeu_pd(out + (int64_t)3 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, t0), _mm256_mul_pd(r3, t1)), _mm256_mul_pd(r6, t2)));
+        _mm256_storeu_pd(out + (int64_t)4 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, t0), _mm256_mul_pd(r4, t1)), _mm256_mul_pd(r7, t2)));
+        _mm256_storeu_pd(out + (int64_t)5 * ld,
+                         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, t0), _mm256_mul_pd(r5, t1)), _mm256_mul_pd(r8, t2)));
+    }
+    {
+#define DCA_LO(x) _mm256_castpd256_pd128(x)
+        const __m128d v0 = _mm_loadu_pd(Z + 4), v1 = _mm_loadu_pd(Z + 10), v2 = _mm_loadu_pd(Z + 16);
+        __m128d t0 = _mm_loadu_pd(Z + 22), t1 = _mm_loadu_pd(Z + 28), t2 = _mm_loadu_pd(Z + 34);
+        if (moved) {
+            t0 = _mm_sub_pd(t0, _mm_sub_pd(_mm_mul_pd(DCA_LO(p1), v2), _mm_mul_pd(DCA_LO(p2), v1)));
+            t1 = _mm_sub_pd(t1, _mm_sub_pd(_mm_mul_pd(DCA_LO(p2), v0), _mm_mul_pd(DCA_LO(p0), v2)));
+            t2 = _mm_sub_pd(t2, _mm_sub_pd(_mm_mul_pd(DCA_LO(p0), v1), _mm_mul_pd(DCA_LO(p1), v0)));
+        }
+        _mm_storeu_pd(out + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r0), v0), _mm_mul_pd(DCA_LO(r3), v1)),
+                                          _mm_mul_pd(DCA_LO(r6), v2)));
+        _mm_storeu_pd(out + ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r1), v0), _mm_mul_pd(DCA_LO(r4), v1)),
+                                               _mm_mul_pd(DCA_LO(r7), v2)));
+        _mm_storeu_pd(out + (int64_t)2 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r2), v0), _mm_mul_pd(DCA_LO(r5), v1)),
+                                                           _mm_mul_pd(DCA_LO(r8), v2)));
+        _mm_storeu_pd(out + (int64_t)3 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r0), t0), _mm_mul_pd(DCA_LO(r3), t1)),
+                                                           _mm_mul_pd(DCA_LO(r6), t2)));
+        _mm_storeu_pd(out + (int64_t)4 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r1), t0), _mm_mul_pd(DCA_LO(r4), t1)),
+                                                           _mm_mul_pd(DCA_LO(r7), t2)));
+        _mm_storeu_pd(out + (int64_t)5 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r2), t0), _mm_mul_pd(DCA_LO(r5), t1)),
+                                                           _mm_mul_pd(DCA_LO(r8), t2)));
+#undef DCA_LO
+    }
+}
+#endif
+
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
  * column by column: spatial_xform_motion's arithmetic, written out. */
-static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
+static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx)
 {
     const double *R = P->R, *p = P->p;
     const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
     int32_t j;
+#ifdef DCA_AVX
+    if (avx) {
+        xform_cols_avx(P, Z, out, ld);
+        return;
+    }
+#else
+    (void)avx;
+#endif
 #ifdef DCA_SSE2
     /* two columns at a time: each entry's expression as in the scalar loop below */
     const __m128d r0 = _mm_set1_pd(R[0]), r1 = _mm_set1_pd(R[1]), r2 = _mm_set1_pd(R[2]), r3 = _mm_set1_pd(R[3]),
@@ -590,6 +805,80 @@ static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld)
  * products of reduced factors only, no large mobility subtracted from
  * another (docs/math.md, "Accurate Phi"). bo: the outer handles' b; kq: w
  * scratch doubles. */
+#ifdef DCA_AVX
+#define DCA_AVX_W 24 /* jc_outer_avx: at most this many columns w */
+/* joint_coefficients' loop over the outer rows, four rows o .. o+3 at a time
+ * with AVX, the rows in the lanes: their entries transposed column by column
+ * (xc[k] = row o..o+3's entry k), then every sum of the scalar loop (FX, b_C,
+ * QX) in its order, lane by lane. Returns the first row left (orows is a
+ * multiple of 6: the last two rows when it is not a multiple of 4). */
+DCA_TARGET_AVX static inline DCA_INLINE int32_t jc_outer_avx_body(const double *X, int32_t ncol, int32_t orows,
+                                                                   int32_t c, int32_t d, int32_t w, const double *E,
+                                                                   const double *Eb, const double *kq, const double *Kp,
+                                                                   const double *bo, double *FX, double *QX, double *bC)
+{
+    __m256d eb[36], ebb[6], kqb[DCA_AVX_W], kb[6 * DCA_AVX_W], xc[DCA_AVX_W];
+    int32_t o, i, k, r;
+    for (k = 0; k < c; k++) {
+        for (i = 0; i < 6; i++) eb[6 * k + i] = _mm256_set1_pd(E[6 * k + i]);
+        ebb[k] = _mm256_set1_pd(Eb[k]);
+    }
+    for (k = c; k < w; k++) kqb[k] = _mm256_set1_pd(kq[k - c]);
+    for (r = 0; r < d; r++)
+        for (k = c; k < w; k++) kb[DCA_AVX_W * r + k] = _mm256_set1_pd(Kp[(int64_t)r * ncol + k]);
+    for (o = 0; o + 3 < orows; o += 4) {
+        const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol, *x3 = x2 + ncol, *x4 = x3 + ncol;
+        __m256d sb;
+        for (k = 0; k + 3 < w; k += 4) {
+            const __m256d ra = _mm256_loadu_pd(x1 + k), rb = _mm256_loadu_pd(x2 + k), rg = _mm256_loadu_pd(x3 + k),
+                          rh = _mm256_loadu_pd(x4 + k);
+            const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb);
+            const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+            xc[k] = _mm256_permute2f128_pd(t0, t2, 0x20);
+            xc[k + 1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+            xc[k + 2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+            xc[k + 3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+        }
+        for (; k < w; k++)
+            xc[k] = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(x1 + k), x2 + k)),
+                                         _mm_loadh_pd(_mm_load_sd(x3 + k), x4 + k), 1);
+        for (i = 0; i < 6; i++) {
+            __m256d f = _mm256_setzero_pd();
+            for (k = 0; k < c; k++) f = _mm256_sub_pd(f, _mm256_mul_pd(eb[6 * k + i], xc[k]));
+            _mm256_storeu_pd(FX + (int64_t)i * orows + o, f);
+        }
+        sb = _mm256_loadu_pd(bo + o);
+        for (k = 0; k < c; k++) sb = _mm256_add_pd(sb, _mm256_mul_pd(xc[k], ebb[k]));
+        for (k = c; k < w; k++) sb = _mm256_add_pd(sb, _mm256_mul_pd(xc[k], kqb[k]));
+        _mm256_storeu_pd(bC + o, sb);
+        for (r = 0; r < d; r++) {
+            __m256d x = _mm256_setzero_pd();
+            for (k = c; k < w; k++) x = _mm256_sub_pd(x, _mm256_mul_pd(kb[DCA_AVX_W * r + k], xc[k]));
+            _mm256_storeu_pd(QX + (int64_t)r * orows + o, x);
+        }
+    }
+    return o;
+}
+
+/* the body for a revolute or prismatic joint (c = 5, d = 1) at the molecule's widths w as constants */
+DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
+                                           int32_t w, const double *E, const double *Eb, const double *kq,
+                                           const double *Kp, const double *bo, double *FX, double *QX, double *bC)
+{
+    if (c == 5 && d == 1) switch (w) {
+        case 6: return jc_outer_avx_body(X, ncol, orows, 5, 1, 6, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 7: return jc_outer_avx_body(X, ncol, orows, 5, 1, 7, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 8: return jc_outer_avx_body(X, ncol, orows, 5, 1, 8, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 9: return jc_outer_avx_body(X, ncol, orows, 5, 1, 9, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 10: return jc_outer_avx_body(X, ncol, orows, 5, 1, 10, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 11: return jc_outer_avx_body(X, ncol, orows, 5, 1, 11, E, Eb, kq, Kp, bo, FX, QX, bC);
+        case 12: return jc_outer_avx_body(X, ncol, orows, 5, 1, 12, E, Eb, kq, Kp, bo, FX, QX, bC);
+        default: break;
+        }
+    return jc_outer_avx_body(X, ncol, orows, c, d, w, E, Eb, kq, Kp, bo, FX, QX, bC);
+}
+#endif
+
 static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
                               const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
                               const double beta[6], const double *Q, const double *bo, double *kq)
@@ -668,7 +957,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     /* two outer rows at a time (orows is a multiple of 6): E's rows two
      * entries at a time for FX, the two rows' b_C and QX sums in the two
      * lanes; every sum as in the scalar loops below, lane by lane */
-    for (o = 0; o < orows; o += 2) {
+    o = 0;
+#ifdef DCA_AVX
+    if (t->avx && w <= DCA_AVX_W) o = jc_outer_avx(X, ncol, orows, c, d, w, E, Eb, kq, Kp, bo, FX, QX, bC);
+#endif
+    for (; o < orows; o += 2) {
         const double *x1 = X + (int64_t)o * ncol, *x2 = x1 + ncol;
         __m128d sb = _mm_loadu_pd(bo + o);
         int32_t h;
@@ -956,9 +1249,9 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         const double *bs = (a ? bA : bB) + 6 * src;
         double F6[36], L6[36], Q6[36], db[6];
         pose_compose(&Kin, &P[ci], &Ph); /* handle ci in K */
-        xform_cols(&Ph, a ? Za : Zb, F6, 6);
-        xform_cols(&Ph, a ? La : Lb, L6, 6);
-        xform_cols(&Ph, a ? Qa : Qb, Q6, 6);
+        xform_cols(&Ph, a ? Za : Zb, F6, 6, t->avx);
+        xform_cols(&Ph, a ? La : Lb, L6, 6, t->avx);
+        xform_cols(&Ph, a ? Qa : Qb, Q6, 6, t->avx);
         spatial_xform_motion(&Ph, a ? g : z, db);
         for (r = 0; r < 6; r++) {
             const int32_t o = 6 * ci + r;
@@ -1085,18 +1378,18 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
                 G[6 * i + j] = YA[6 * i + j];
                 G[6 * i + 3 + j] = YB[6 * i + j];
             }
-        reflect_row_body(G, 6, 0, 6, 0, 0, 6, vr);
-        reflect_row_body(G, 6, 1, 6, 1, 1, 6, vr);
-        reflect_row_body(G, 6, 2, 6, 2, 2, 6, vr);
+        reflect_row_body(G, 6, 0, 6, 0, 0, 6, vr, 0);
+        reflect_row_body(G, 6, 1, 6, 1, 1, 6, vr, 0);
+        reflect_row_body(G, 6, 2, 6, 2, 2, 6, vr, 0);
         for (i = 0; i < 3; i++)
             for (j = 0; j < 3; j++) {
                 H[9 * i + j] = i == j ? sA : 0.0;
                 H[9 * i + 3 + j] = G[6 * (3 + i) + 3 + j];
                 H[9 * i + 6 + j] = i == j ? sB : 0.0;
             }
-        reflect_row_body(H, 9, 0, 3, 0, 0, 9, vr);
-        reflect_row_body(H, 9, 1, 3, 1, 1, 9, vr);
-        reflect_row_body(H, 9, 2, 3, 2, 2, 9, vr);
+        reflect_row_body(H, 9, 0, 3, 0, 0, 9, vr, 0);
+        reflect_row_body(H, 9, 1, 3, 1, 1, 9, vr, 0);
+        reflect_row_body(H, 9, 2, 3, 2, 2, 9, vr, 0);
         memset(Lm, 0, sizeof Lm);
         for (i = 0; i < 3; i++)
             for (j = 0; j <= i; j++) Lm[6 * i + j] = G[6 * i + j];
@@ -1166,7 +1459,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     /* (M is not cleared: every entry the reflections and the coefficients read is
      * written below, the other side's columns of the outer rows as zeros; the
      * constraint and relative rows are read only in their first w columns) */
-    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol);
+    for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol, t->avx);
     /* The children's outer rows, each in its own columns. */
     for (i = 0, ci = 0; i < nA; i++) {
         const double *la;
@@ -1199,7 +1492,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         ci++;
     }
     /* The relative acceleration across k (B's minus A's), in k's child frame. */
-    xform_cols(&PkbF, Lm, rel, ncol);
+    xform_cols(&PkbF, Lm, rel, ncol, t->avx);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
     for (j = 0; j < a6; j++) {
@@ -1283,7 +1576,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     /* (the rows above q are reduced already: zero from column q on) */
-    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v);
+    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v, t->avx);
     {
         /* b of the outer handles, in C's handle order */
         double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
@@ -1302,7 +1595,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
-        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v);
+        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v, t->avx);
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
