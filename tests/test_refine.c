@@ -23,6 +23,7 @@
 #include "randtree.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -155,6 +156,29 @@ static void aba_then_dca(aqs_linkage *L, int32_t nv, int32_t nj, double *qa, dou
     assert_int_equal(aqs_linkage_get_constraint_forces(L, fd, 6 * (size_t)nj), AQS_OK);
 }
 
+/* The ABA against the refined exact DCA on L (aba_then_dca), then destroyed:
+ * at least min_steps correction steps, accelerations within 1e-14 of the
+ * ABA's (relative 2-norm), joint forces within ftol. */
+static void refined_vs_aba(aqs_linkage *L, const char *what, int32_t min_steps, double ftol)
+{
+    int32_t nv, nj;
+    double *qa, *qd, *fa, *fd;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv), AQS_OK);
+    qa = calloc((size_t)nv, sizeof *qa);
+    qd = calloc((size_t)nv, sizeof *qd);
+    fa = calloc(6 * (size_t)nj, sizeof *fa);
+    fd = calloc(6 * (size_t)nj, sizeof *fd);
+    assert_non_null(qa && qd && fa && fd);
+    aba_then_dca(L, nv, nj, qa, fa, qd, fd);
+    print_message("%s: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", what, test_rel_diff(qd, qa, (size_t)nv),
+                  (int)L->s.refined, test_rel_diff(fd, fa, 6 * (size_t)nj));
+    assert_true(L->s.refined >= min_steps);
+    assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-14);
+    assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= ftol);
+    free(qa), free(qd), free(fa), free(fd);
+    aqs_linkage_destroy(L);
+}
+
 /* The refined exact DCA within 1e-13 of the ABA (relative 2-norm; the ABA is
  * 5e-16 .. 1e-15 from the truth here, the refined DCA 2e-16, hardcases),
  * where the unrefined back-substitution (the adaptive path computing every
@@ -269,29 +293,13 @@ static void test_altmass_gmres(void **state)
     size_t c;
     (void)state;
     for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        const int weld = c == 1;
-        aqs_linkage *L = altmass(cases[c].n, 1e9, weld, cases[c].seed);
-        int32_t nv, nj;
-        double *qa, *qd, *fa, *fd;
-        assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv), AQS_OK);
-        qa = calloc((size_t)nv, sizeof *qa);
-        qd = calloc((size_t)nv, sizeof *qd);
-        fa = calloc(6 * (size_t)nj, sizeof *fa);
-        fd = calloc(6 * (size_t)nj, sizeof *fd);
-        assert_non_null(qa && qd && fa && fd);
-        aba_then_dca(L, nv, nj, qa, fa, qd, fd);
-        assert_true(L->s.refined >= 2);
-        print_message("altmass 1e9 n=%d seed %d: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", cases[c].n,
-                      (int)cases[c].seed, test_rel_diff(qd, qa, (size_t)nv), (int)L->s.refined,
-                      test_rel_diff(fd, fa, 6 * (size_t)nj));
-        assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-14);
+        char what[64];
+        snprintf(what, sizeof what, "altmass 1e9 n=%d seed %d", cases[c].n, (int)cases[c].seed);
         /* forces: the inverse dynamics' of the refined answer against the
          * ABA's, measured 7.8e-12 .. 2.6e-11 at 100 links, 1.8e-9 at 1000 (the
          * base carries 5e2 bodies of 1e9 kg); no extended-precision reference
          * of the forces, so this only says the two double answers agree. */
-        assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 1e-8);
-        free(qa), free(qd), free(fa), free(fd);
-        aqs_linkage_destroy(L);
+        refined_vs_aba(altmass(cases[c].n, 1e9, c == 1, cases[c].seed), what, 2, 1e-8);
     }
 }
 
@@ -311,26 +319,12 @@ static void test_altmass_restart(void **state)
     int seed;
     (void)state;
     for (seed = 1; seed <= 3; seed++) {
-        aqs_linkage *L = altmass(2000, 1e9, seed == 2, (uint64_t)seed);
-        int32_t nv, nj;
-        double *qa, *qd, *fa, *fd;
-        assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv), AQS_OK);
-        qa = calloc((size_t)nv, sizeof *qa);
-        qd = calloc((size_t)nv, sizeof *qd);
-        fa = calloc(6 * (size_t)nj, sizeof *fa);
-        fd = calloc(6 * (size_t)nj, sizeof *fd);
-        assert_non_null(qa && qd && fa && fd);
-        aba_then_dca(L, nv, nj, qa, fa, qd, fd);
-        print_message("altmass 1e9 n=2000 seed %d: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", seed,
-                      test_rel_diff(qd, qa, (size_t)nv), (int)L->s.refined, test_rel_diff(fd, fa, 6 * (size_t)nj));
-        assert_true(L->s.refined > 20);
-        assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-14);
+        char what[64];
+        snprintf(what, sizeof what, "altmass 1e9 n=2000 seed %d", seed);
         /* forces: as test_altmass_gmres (the two double answers agree; no
          * extended-precision reference of the forces), measured 2.2e-8 .. 2.9e-8
          * (1.8e-9 .. 2.9e-9 at 1,000 links: they grow with the chain's load) */
-        assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 2e-7);
-        free(qa), free(qd), free(fa), free(fd);
-        aqs_linkage_destroy(L);
+        refined_vs_aba(altmass(2000, 1e9, seed == 2, (uint64_t)seed), what, 21, 2e-7);
     }
 }
 
