@@ -80,6 +80,8 @@ struct refine {
     double *v;      /* (kcap + 1) nv: the Krylov basis of M P (orthonormal) */
     double *z;      /* kcap nv: P v_j, the preconditioned directions */
     int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
+    double (*h)[KRYLOV_MAX]; /* KRYLOV_MAX + 1 rows: the Hessenberg matrix, with the basis (132 KB: not
+                                on the stack of the caller's thread) */
 };
 
 void refine_free(aqs_linkage *L)
@@ -94,6 +96,7 @@ void refine_free(aqs_linkage *L)
     lk_free(L, R->df);
     lk_free(L, R->v);
     lk_free(L, R->z);
+    lk_free(L, R->h);
     lk_free(L, R);
     L->rf = NULL;
 }
@@ -138,6 +141,10 @@ static int krylov_alloc(aqs_linkage *L, int32_t steps)
     const size_t nv = (size_t)L->nv + 1, old = (size_t)R->kcap;
     double *v, *z;
     if (R->kcap >= steps) return 0;
+    if (!R->h) {
+        R->h = lk_calloc_in(L, LK_MEM_DCA, KRYLOV_MAX + 1, sizeof *R->h);
+        if (!R->h) return -1;
+    }
     v = lk_calloc_in(L, LK_MEM_DCA, ((size_t)steps + 1) * nv, sizeof(double));
     z = lk_calloc_in(L, LK_MEM_DCA, (size_t)steps * nv, sizeof(double));
     if (!v || !z) {
@@ -247,7 +254,7 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
     struct refine *R = L->rf;
     const int32_t nv = L->nv;
     const size_t snv = (size_t)nv + 1;
-    double h[KRYLOV_MAX + 1][KRYLOV_MAX], cs[KRYLOV_MAX], sn[KRYLOV_MAX], g[KRYLOV_MAX + 1], y[KRYLOV_MAX];
+    double (*h)[KRYLOV_MAX] = NULL, cs[KRYLOV_MAX], sn[KRYLOV_MAX], g[KRYLOV_MAX + 1], y[KRYLOV_MAX];
     int32_t i, j, l, k = 0;
     g[0] = rn;
     *est = rn;
@@ -279,7 +286,8 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
                 return 1;
             }
             dmax = qmax = 0.0;
-            vj = R->v; /* allocated now */
+            h = R->h; /* allocated now, with the basis */
+            vj = R->v;
             w = R->v + snv;
             zj = R->z;
             for (i = 0; i < nv; i++) {
