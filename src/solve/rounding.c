@@ -43,6 +43,8 @@ enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
 #define RN(t, nd) ((t)->rnd_node + 5 * ((nd) - (t)->nodes))
 
 #define RND_G0 2.0
+/* joint_error keeps the handles' |x_h| of its first loop for its second up to this many handles */
+#define AQS_JE_MAXH 16
 #define RND_R0 8.0
 
 static double maxd(double a, double b) { return a > b ? a : b; }
@@ -217,7 +219,10 @@ void rounding_solve_start(aqs_linkage *L)
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
- * handle forces; with set, also the children's handle-force errors. */
+ * handle forces; with set, also the children's handle-force errors. Only
+ * the internal children's are set unless the world measures are active:
+ * a leaf's handle-force errors are read by worldbound.c alone (comp_accel,
+ * right after its parent is processed), never by joint_error. */
 static double joint_error(aqs_linkage *L, int32_t n, int set)
 {
     tree *t = &L->t;
@@ -225,8 +230,8 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
     const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K];
-    double sq = 0.0, qe = 0.0;
-    int32_t h, i, k;
+    double sq = 0.0, qe = 0.0, xns[AQS_JE_MAXH];
+    int32_t h, i;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
      * QX's error), and each handle's relative error carried by its share
      * QX_h x_h */
@@ -236,6 +241,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
             const double *xh = x + 6 * h;
             const double xn = n6(xh), w = xn > 0.0 ? ex[h] / xn : 0.0;
             double qq = 0.0;
+            if (h < AQS_JE_MAXH) xns[h] = xn;
             for (i = 0; i < d; i++) {
                 const double *qr = QX + (int64_t)i * rows + 6 * h;
                 const double p0 = qr[0] * xh[0], p1 = qr[1] * xh[1], p2 = qr[2] * xh[2], p3 = qr[3] * xh[3],
@@ -247,7 +253,6 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
             qe += w * sqrt(qq);
         }
         for (i = 0; i < d; i++) sq += a[i] * a[i];
-        (void)k;
     }
     if (set) {
         /* f = gamma + FX x: each handle force's relative error carried by its
@@ -255,35 +260,41 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
          * (its relative error kept through the transform), the others keep
          * theirs (the order of dca_node_backsub) */
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
-        const double *f = L->cforce + 6 * L->m.eff_joint[C->joint];
-        const double fn = n6(f);
-        double ef = RN(t, C)[RND_GAM], sf = n6(t->data + nd_gamma(C)), *exA = t->rnd_x + A->handles, *exB = t->rnd_x + B->handles;
-        int32_t ci;
-        for (h = 0; h < C->nh; h++) {
-            const int32_t o = 6 * h;
-            const double xn = n6(x + o);
-            double v[6], vn;
-            if (xn == 0.0) continue;
-            for (i = 0; i < 6; i++) {
-                const double *fr = FX + (int64_t)i * rows + o;
-                v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
-                       fr[5] * x[o + 5];
+        const int all = worldbound_active(L), setA = all || A->joint >= 0, setB = all || B->joint >= 0;
+        if (setA || setB) {
+            double ef = RN(t, C)[RND_GAM], sf = n6(t->data + nd_gamma(C)), *exA = t->rnd_x + A->handles,
+                   *exB = t->rnd_x + B->handles;
+            int32_t ci;
+            for (h = 0; h < C->nh; h++) {
+                const int32_t o = 6 * h;
+                const double xn = h < AQS_JE_MAXH ? xns[h] : n6(x + o);
+                double v[6], vn;
+                if (xn == 0.0) continue;
+                for (i = 0; i < 6; i++) {
+                    const double *fr = FX + (int64_t)i * rows + o;
+                    v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
+                           fr[5] * x[o + 5];
+                }
+                vn = n6(v);
+                ef += ex[h] / xn * vn;
+                sf += vn;
             }
-            vn = n6(v);
-            ef += ex[h] / xn * vn;
-            sf += vn;
-        }
-        ef += ku * sf;
-        for (i = 0, ci = 0; i < A->nh; i++) {
-            if (i == C->ka) {
-                const double xk = n6(t->data + nd_xf(A) + 6 * i);
-                exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
-            } else
-                exA[i] = ex[ci++];
-        }
-        for (i = 0; i < B->nh; i++) {
-            if (i == C->kb) exB[i] = ef;
-            else exB[i] = ex[ci++];
+            ef += ku * sf;
+            if (setA) {
+                const double fn = n6(L->cforce + 6 * L->m.eff_joint[C->joint]);
+                for (i = 0, ci = 0; i < A->nh; i++) {
+                    if (i == C->ka) {
+                        const double xk = n6(t->data + nd_xf(A) + 6 * i);
+                        exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
+                    } else
+                        exA[i] = ex[ci++];
+                }
+            }
+            if (setB)
+                for (i = 0, ci = A->nh - 1; i < B->nh; i++) {
+                    if (i == C->kb) exB[i] = ef;
+                    else exB[i] = ex[ci++];
+                }
         }
     }
     return RN(t, C)[RND_RHO] + qe + ku * sqrt(sq);
