@@ -48,9 +48,20 @@ enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
 #define RND_R0 8.0
 
 static double maxd(double a, double b) { return a > b ? a : b; }
+/* sqrt of a sum of squares (>= 0 or NaN): the instruction itself, without
+ * the test for a negative argument (errno) the library call brings. */
+static double sqrtn(double x)
+{
+#ifdef RND_SSE2
+    const __m128d v = _mm_set_sd(x);
+    return _mm_cvtsd_f64(_mm_sqrt_sd(v, v));
+#else
+    return sqrt(x);
+#endif
+}
 static double n6(const double *v)
 {
-    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    return sqrtn(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
 }
 /* max(1, terms / result): the growth of a relative error through a sum */
 static double ratio(double terms, double result)
@@ -122,7 +133,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
      * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
     {
         const double mA = t->data[nd_ic(A)], mB = t->data[nd_ic(B)];
-        if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrt(maxd(mA / mB, mB / mA));
+        if (!A->grounded && !B->grounded && mA > 0.0 && mB > 0.0) g += sqrtn(maxd(mA / mB, mB / mA));
     }
     kappa = maxd(kA, kB) + g;
     /* beta = X b^A_k - b^B_k: the children's levels weighted by their terms */
@@ -198,8 +209,8 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
             sgam += a * a;
         }
     }
-    RN(t, C)[RND_RHO] = fu * kbeta * sqrt(srho);
-    RN(t, C)[RND_GAM] = fu * kbeta * sqrt(sgam);
+    RN(t, C)[RND_RHO] = fu * kbeta * sqrtn(srho);
+    RN(t, C)[RND_GAM] = fu * kbeta * sqrtn(sgam);
     RN(t, C)[RND_K] = kappa;
     RN(t, C)[RND_KB] = kb;
     {
@@ -250,7 +261,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 q[i] = p0 + p1 + p2 + p3 + p4 + p5;
                 qq += q[i] * q[i];
             }
-            qe += w * sqrt(qq);
+            qe += w * sqrtn(qq);
         }
         for (i = 0; i < d; i++) sq += a[i] * a[i];
     }
@@ -297,7 +308,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 }
         }
     }
-    return RN(t, C)[RND_RHO] + qe + ku * sqrt(sq);
+    return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
 }
 
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
