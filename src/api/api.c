@@ -731,6 +731,16 @@ static int all_finite(const double *x, size_t n)
     return s0 + s1 + s2 + s3 == 0.0;
 }
 
+/* Whether a joint's nv accelerations and 6 constraint-force entries are all
+ * finite (x * 0 is 0 for finite x, NaN otherwise), in one pass. */
+static int joint_outputs_finite(const double *qdd, int nv, const double *f)
+{
+    double s = f[0] * 0.0 + f[1] * 0.0 + f[2] * 0.0 + f[3] * 0.0 + f[4] * 0.0 + f[5] * 0.0;
+    int k;
+    for (k = 0; k < nv; k++) s += qdd[k] * 0.0;
+    return s == 0.0;
+}
+
 /* Non-finite numbers are never returned silently: check what was computed. */
 static aqs_status check_outputs(aqs_linkage *L, const char *fn)
 {
@@ -749,8 +759,13 @@ static aqs_status check_outputs(aqs_linkage *L, const char *fn)
             return lk_fail(L, AQS_ENUMERIC,
                            "%s: the error bound came out non-finite (bound = %g, queued sum = %g): "
                            "the loads are too large for double precision", fn, s->bound, s->sum);
-        for (i = 0; i < s->nprocessed && st == AQS_OK; i++)
-            st = check_joint_outputs(L, fn, L->m.eff_joint[L->t.nodes[s->processed[i]].joint]);
+        for (i = 0; i < s->nprocessed && st == AQS_OK; i++) {
+            const int32_t j = L->m.eff_joint[L->t.nodes[s->processed[i]].joint];
+            const joint_def *jd = &L->joints[j];
+            /* the joint loop's check (and message) only where one is not finite */
+            if (!joint_outputs_finite(L->qdd + jd->voff, joint_nv(jd->type), L->cforce + 6 * j))
+                st = check_joint_outputs(L, fn, j);
+        }
     }
     return st;
 }
@@ -908,7 +923,8 @@ static aqs_status check_moved_positions(aqs_linkage *L, const char *fn)
     for (i = 0; i < n; i++) {
         int32_t j = s->all ? i : L->m.eff_joint[L->t.nodes[s->processed[i]].joint];
         const joint_def *jd = &L->joints[j];
-        for (k = 0; k < joint_nq(jd->type); k++)
+        const int nq = joint_nq(jd->type);
+        for (k = 0; k < nq; k++)
             if (!isfinite(L->q[jd->qoff + k]))
                 return lk_fail(L, AQS_ENUMERIC, "%s: the position of joint %d became non-finite", fn, (int)j);
     }

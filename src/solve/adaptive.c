@@ -67,7 +67,8 @@ static void reset_outputs(aqs_linkage *L)
         for (i = 0; i < s->nprocessed; i++) {
             int32_t j = m->eff_joint[L->t.nodes[s->processed[i]].joint];
             const joint_def *jd = &L->joints[j];
-            for (k = 0; k < joint_nv(jd->type); k++) L->qdd[jd->voff + k] = 0.0;
+            const int nv = joint_nv(jd->type);
+            for (k = 0; k < nv; k++) L->qdd[jd->voff + k] = 0.0;
             for (k = 0; k < 6; k++) L->cforce[6 * j + k] = NAN;
         }
         for (i = 0; i < s->nreached; i++) {
@@ -89,9 +90,11 @@ static void reset_outputs(aqs_linkage *L)
 static double norm_qdd(const aqs_linkage *L, int32_t n)
 {
     const joint_def *jd = &L->joints[L->m.eff_joint[L->t.nodes[n].joint]];
+    const double *qdd = L->qdd + jd->voff;
+    const int nv = joint_nv(jd->type);
     double s = 0.0;
     int k;
-    for (k = 0; k < joint_nv(jd->type); k++) s += L->qdd[jd->voff + k] * L->qdd[jd->voff + k];
+    for (k = 0; k < nv; k++) s += qdd[k] * qdd[k];
     return sqrt(s);
 }
 
