@@ -10,6 +10,35 @@
 #include "kintree.h"
 #include "stale.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+/* out = a b, the operations of pose_compose (src/base/spatial.c) in its
+ * order: R's columns 0 and 1 two at a time under SSE2 (each lane the scalar
+ * sum a_i0 b_0j + a_i1 b_1j + a_i2 b_2j), the rest scalar. out must not be
+ * a or b. */
+static void compose(const pose *a, const pose *b, pose *out)
+{
+    const double *A = a->R, *B = b->R;
+    int i;
+#if defined(__SSE2__)
+    const __m128d b0 = _mm_loadu_pd(B), b1 = _mm_loadu_pd(B + 3), b2 = _mm_loadu_pd(B + 6);
+    for (i = 0; i < 3; i++) {
+        const double a0 = A[3 * i], a1 = A[3 * i + 1], a2 = A[3 * i + 2];
+        _mm_storeu_pd(out->R + 3 * i, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set1_pd(a0), b0), _mm_mul_pd(_mm_set1_pd(a1), b1)),
+                                                 _mm_mul_pd(_mm_set1_pd(a2), b2)));
+        out->R[3 * i + 2] = a0 * B[2] + a1 * B[5] + a2 * B[8];
+    }
+#else
+    for (i = 0; i < 3; i++) {
+        int j;
+        for (j = 0; j < 3; j++) out->R[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+    }
+#endif
+    for (i = 0; i < 3; i++) out->p[i] = a->p[i] + (A[3 * i] * b->p[0] + A[3 * i + 1] * b->p[1] + A[3 * i + 2] * b->p[2]);
+}
+
 /* Handle-frame poses of a leaf in its composite's frame (constant). */
 static void frames_leaf(aqs_linkage *L, int32_t n)
 {
@@ -30,7 +59,7 @@ static void child_frame_in_node(const aqs_linkage *L, const node *C, pose *out)
 {
     const tree *t = &L->t;
     const pose *PA = t->poses + t->nodes[C->a].poses;
-    pose_compose(&PA[C->ka], t->poses + nd_J(C), out);
+    compose(&PA[C->ka], t->poses + nd_J(C), out);
 }
 
 void frames_node(aqs_linkage *L, int32_t n)
@@ -46,7 +75,7 @@ void frames_node(aqs_linkage *L, int32_t n)
     for (i = 0; i < A->nh; i++)
         if (i != C->ka) P[ci++] = PA[i];
     for (i = 0; i < B->nh; i++)
-        if (i != C->kb) pose_compose(&Pk, &PB[i], &P[ci++]);
+        if (i != C->kb) compose(&Pk, &PB[i], &P[ci++]);
     AQS_ASSERT(ci == C->nh && C->nh == A->nh + B->nh - 2); /* the joined handles drop out */
     if (L->col) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
