@@ -5,6 +5,16 @@
 #include <math.h>
 #include <string.h>
 
+/* AVX for the long reflections of dense_qr_append (dense_qr_append_simd):
+ * compiled for AVX by a function attribute whatever the build's flags, run
+ * only when the caller says the processor has it (the tree's flag, set by
+ * dca_enable). "avx", not "fma": every lane rounds as the scalar code. */
+#if defined(__SSE2__) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define DENSE_AVX 1
+#define DENSE_TARGET_AVX __attribute__((target("avx")))
+#endif
+
 void dense_mul(const double *A, const double *B, double *C, int m, int k, int n)
 {
     int i, j, l;
@@ -312,7 +322,115 @@ static void reflect_columns(const double *a, int m, double tau, double *t, long 
     }
 }
 
+#ifdef DENSE_AVX
+/* reflect_columns' loop for m > 6 with four columns a pass: their sums in the
+ * four lanes of one register, each from its pivot entry and then in the
+ * order of i (a 4 x 4 block of the columns transposed so that lane k meets
+ * column k's entries one i at a time), then f = tau sum; each column's
+ * x[i] - f a[i] four entries at a time; then two columns in two lanes, and
+ * one. Each column's arithmetic is that of the scalar loop. Returns ncols. */
+/* x[i] -= f a[i], four entries at a time */
+DENSE_TARGET_AVX static inline void axpy_avx(double *x, double f, const double *a, int m)
+{
+    const __m256d ff = _mm256_set1_pd(f);
+    int i;
+    for (i = 0; i + 3 < m; i += 4)
+        _mm256_storeu_pd(x + i, _mm256_sub_pd(_mm256_loadu_pd(x + i), _mm256_mul_pd(ff, _mm256_loadu_pd(a + i))));
+    for (; i < m; i++) x[i] -= f * a[i];
+}
+
+DENSE_TARGET_AVX static int reflect_long_avx(const double *a, int m, double tau, double *t, long ts, double *x,
+                                             long xs, int ncols)
+{
+    const __m256d tt = _mm256_set1_pd(tau);
+    int c, i;
+    for (c = 0; c + 3 < ncols; c += 4, t += 4 * ts, x += 4 * xs) {
+        double *x0 = x, *x1 = x + xs, *x2 = x1 + xs, *x3 = x2 + xs, f[4];
+        __m256d acc = _mm256_set_pd(t[3 * ts], t[2 * ts], t[ts], t[0]);
+        for (i = 0; i + 3 < m; i += 4) {
+            const __m256d ra = _mm256_loadu_pd(x0 + i), rb = _mm256_loadu_pd(x1 + i), rg = _mm256_loadu_pd(x2 + i),
+                          rh = _mm256_loadu_pd(x3 + i);
+            const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+            const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(a + i), _mm256_permute2f128_pd(t0, t2, 0x20)));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(a + i + 1), _mm256_permute2f128_pd(t1, t3, 0x20)));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(a + i + 2), _mm256_permute2f128_pd(t0, t2, 0x31)));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(a + i + 3), _mm256_permute2f128_pd(t1, t3, 0x31)));
+        }
+        for (; i < m; i++) {
+            const __m128d lo = _mm_loadh_pd(_mm_load_sd(x0 + i), x1 + i), hi = _mm_loadh_pd(_mm_load_sd(x2 + i), x3 + i);
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(a + i),
+                                                   _mm256_insertf128_pd(_mm256_castpd128_pd256(lo), hi, 1)));
+        }
+        _mm256_storeu_pd(f, _mm256_mul_pd(tt, acc));
+        t[0] -= f[0];
+        t[ts] -= f[1];
+        t[2 * ts] -= f[2];
+        t[3 * ts] -= f[3];
+        {
+            const __m256d f0 = _mm256_broadcast_sd(f), f1 = _mm256_broadcast_sd(f + 1), f2 = _mm256_broadcast_sd(f + 2),
+                          f3 = _mm256_broadcast_sd(f + 3);
+            for (i = 0; i + 3 < m; i += 4) {
+                const __m256d va = _mm256_loadu_pd(a + i);
+                _mm256_storeu_pd(x0 + i, _mm256_sub_pd(_mm256_loadu_pd(x0 + i), _mm256_mul_pd(f0, va)));
+                _mm256_storeu_pd(x1 + i, _mm256_sub_pd(_mm256_loadu_pd(x1 + i), _mm256_mul_pd(f1, va)));
+                _mm256_storeu_pd(x2 + i, _mm256_sub_pd(_mm256_loadu_pd(x2 + i), _mm256_mul_pd(f2, va)));
+                _mm256_storeu_pd(x3 + i, _mm256_sub_pd(_mm256_loadu_pd(x3 + i), _mm256_mul_pd(f3, va)));
+            }
+            for (; i < m; i++) {
+                x0[i] -= f[0] * a[i];
+                x1[i] -= f[1] * a[i];
+                x2[i] -= f[2] * a[i];
+                x3[i] -= f[3] * a[i];
+            }
+        }
+    }
+    if (c + 1 < ncols) { /* two columns: their sums in two lanes */
+        double *x0 = x, *x1 = x + xs, f[2];
+        __m128d acc = _mm_set_pd(t[ts], t[0]);
+        for (i = 0; i < m; i++)
+            acc = _mm_add_pd(acc, _mm_mul_pd(_mm_set1_pd(a[i]), _mm_loadh_pd(_mm_load_sd(x0 + i), x1 + i)));
+        _mm_storeu_pd(f, _mm_mul_pd(_mm256_castpd256_pd128(tt), acc));
+        t[0] -= f[0];
+        t[ts] -= f[1];
+        axpy_avx(x0, f[0], a, m);
+        axpy_avx(x1, f[1], a, m);
+        c += 2;
+        t += 2 * ts;
+        x += 2 * xs;
+    }
+    if (c < ncols) {
+        double sum = *t, f;
+        for (i = 0; i < m; i++) sum += a[i] * x[i];
+        f = tau * sum;
+        *t -= f;
+        axpy_avx(x, f, a, m);
+        c++;
+    }
+    return c;
+}
+#endif
+
+/* reflect_columns, with the AVX loop for m > 6 where avx says. */
+static inline void reflect_columns_simd(const double *a, int m, double tau, double *t, long ts, double *x, long xs,
+                                 int ncols, int avx)
+{
+#ifdef DENSE_AVX
+    if (avx && m > 6 && ncols >= 4) {
+        (void)reflect_long_avx(a, m, tau, t, ts, x, xs, ncols);
+        return;
+    }
+#endif
+    (void)avx;
+    reflect_columns(a, m, tau, t, ts, x, xs, ncols);
+}
+
 int dense_qr_append(double *R, int n, int *present, double *D, int p)
+{
+    return dense_qr_append_simd(R, n, present, D, p, 0);
+}
+
+int dense_qr_append_simd(double *R, int n, int *present, double *D, int p, int avx)
 {
     int j, i, c, s = 0, rows = 0;
     for (j = 0; j < n; j++) {
@@ -363,8 +481,9 @@ int dense_qr_append(double *R, int n, int *present, double *D, int p)
             const double iv = 1.0 / v0; /* |v0| >= scale >= DBL_MIN */
             for (i = i0; i < q; i++) a[i] *= iv;
         }
-        if (pr) reflect_columns(a + i0, q - i0, tau, rj + j + 1, 1, D + (long)(j + 1) * p + s + i0, p, n - j - 1);
-        else reflect_columns(a + 1, q - 1, tau, D + (long)(j + 1) * p + s, p, D + (long)(j + 1) * p + s + 1, p, n - j - 1);
+        if (pr) reflect_columns_simd(a + i0, q - i0, tau, rj + j + 1, 1, D + (long)(j + 1) * p + s + i0, p, n - j - 1, avx);
+        else reflect_columns_simd(a + 1, q - 1, tau, D + (long)(j + 1) * p + s, p, D + (long)(j + 1) * p + s + 1, p, n - j - 1,
+                                  avx);
         if (!pr) {
             /* D's first live row becomes R's row j (zero left of j already) */
             for (c = j + 1; c < n; c++) rj[c] = D[(long)c * p + s];

@@ -91,5 +91,9 @@ void dense_cholesky6_upper_solve(const double *C, const double *w, double *v, in
  * (present[j] set) and leaves D. D is destroyed. Returns the present rows.
  * About 2 p n^2 flops, against 2 (n + p) n^2 for the stacked matrix. */
 int dense_qr_append(double *R, int n, int *present, double *D, int p);
+/* The same with avx != 0 where the processor has AVX (the tree's flag,
+ * src/solve/dca.c): the reflections over more than 6 rows four columns at a
+ * time with AVX, the same results bit for bit. avx = 0 is dense_qr_append. */
+int dense_qr_append_simd(double *R, int n, int *present, double *D, int p, int avx);
 
 #endif

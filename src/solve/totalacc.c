@@ -296,7 +296,7 @@ void totalacc_node_update(aqs_linkage *L, int32_t n)
     }
     place_rows(t, C->a, da, offA, mapA, cols, R, present);
     place_rows(t, C->b, db, offB, mapB, cols, R, present);
-    (void)dense_qr_append(R, cols, present, D, p);
+    (void)dense_qr_append_simd(R, cols, present, D, p, t->avx);
     /* keep the present rows, in order, packed */
     for (j = 0, r = 0, off = 0; j < cols; j++) {
         if (!present[j]) continue;
