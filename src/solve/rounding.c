@@ -37,6 +37,14 @@
 #include <emmintrin.h>
 #define RND_SSE2 1
 #endif
+/* AVX for gamma's entrywise sums (as src/solve/dca.c's kernels: a function
+ * attribute, run where the tree's flag says the processor has AVX; "avx",
+ * not "fma": every lane rounds as the scalar code) */
+#if defined(RND_SSE2) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define RND_AVX 1
+#define RND_TARGET_AVX __attribute__((target("avx")))
+#endif
 
 /* A node's levels in tree.rnd_node (5 per node). */
 enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
@@ -91,6 +99,61 @@ static double wlevel(const double *k, const double *a, int n)
         }
     return den > 0.0 ? num / den : 1.0;
 }
+
+#ifdef RND_AVX
+/* rounding_node's gamma sum with AVX, its scalar loops' arithmetic lane by
+ * lane: E beta's entrywise sums four rows k at a time (the rows' 4 x 6 block
+ * transposed so that lane k meets row k's entries in the order of j), then
+ * the sums over k and i for j = 0..3 in one register and j = 4, 5 in
+ * another, and sgam summed in j's order. E: c x 6, U: d x 6. */
+RND_TARGET_AVX static double gamma_sum_avx(const double *E, const double *beta, const double *U, const double *Q,
+                                           int32_t c, int32_t d)
+{
+    const __m256d ab = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL)); /* fabs */
+    const __m128d ab2 = _mm256_castpd256_pd128(ab);
+    __m256d lo = _mm256_setzero_pd();
+    __m128d hi = _mm_setzero_pd();
+    double eb[6], a6[6], sg = 0.0;
+    int32_t i, j, k = 0;
+    if (c >= 4) {
+        const __m256d ra = _mm256_loadu_pd(E), rb = _mm256_loadu_pd(E + 6), rg = _mm256_loadu_pd(E + 12),
+                      rh = _mm256_loadu_pd(E + 18);
+        const __m256d t0 = _mm256_unpacklo_pd(ra, rb), t1 = _mm256_unpackhi_pd(ra, rb); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+        const __m256d t2 = _mm256_unpacklo_pd(rg, rh), t3 = _mm256_unpackhi_pd(rg, rh);
+        const __m128d la = _mm_loadu_pd(E + 4), lb = _mm_loadu_pd(E + 10), lg = _mm_loadu_pd(E + 16),
+                      lh = _mm_loadu_pd(E + 22);
+        __m256d col[6], acc = _mm256_setzero_pd();
+        col[0] = _mm256_permute2f128_pd(t0, t2, 0x20); /* (a0 b0 g0 h0) */
+        col[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+        col[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+        col[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+        col[4] = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_unpacklo_pd(la, lb)), _mm_unpacklo_pd(lg, lh), 1);
+        col[5] = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_unpackhi_pd(la, lb)), _mm_unpackhi_pd(lg, lh), 1);
+        for (j = 0; j < 6; j++) acc = _mm256_add_pd(acc, _mm256_and_pd(_mm256_mul_pd(col[j], _mm256_broadcast_sd(beta + j)), ab));
+        _mm256_storeu_pd(eb, acc);
+        k = 4;
+    }
+    for (; k < c; k++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(E[6 * k + j] * beta[j]);
+        eb[k] = a;
+    }
+    for (k = 0; k < c; k++) {
+        const __m256d e = _mm256_broadcast_sd(eb + k);
+        lo = _mm256_add_pd(lo, _mm256_mul_pd(_mm256_and_pd(_mm256_loadu_pd(E + 6 * k), ab), e));
+        hi = _mm_add_pd(hi, _mm_mul_pd(_mm_and_pd(_mm_loadu_pd(E + 6 * k + 4), ab2), _mm256_castpd256_pd128(e)));
+    }
+    for (i = 0; i < d; i++) {
+        const __m256d q = _mm256_broadcast_sd(Q + i);
+        lo = _mm256_add_pd(lo, _mm256_and_pd(_mm256_mul_pd(_mm256_loadu_pd(U + 6 * i), q), ab));
+        hi = _mm_add_pd(hi, _mm_and_pd(_mm_mul_pd(_mm_loadu_pd(U + 6 * i + 4), _mm256_castpd256_pd128(q)), ab2));
+    }
+    _mm256_storeu_pd(a6, lo);
+    _mm_storeu_pd(a6 + 4, hi);
+    for (j = 0; j < 6; j++) sg += a6[j] * a6[j];
+    return sg;
+}
+#endif
 
 static void child_levels(const tree *t, const node *c, double *k, double *kb)
 {
@@ -172,6 +235,11 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
         srho += a * a;
     }
+#ifdef RND_AVX
+    if (E && t->avx) {
+        sgam = gamma_sum_avx(E, beta, U, Q, c, d);
+    } else
+#endif
     if (E) {
         for (k = 0; k < c; k++) {
             double a = 0.0;
