@@ -321,6 +321,26 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
             const double xn = n6(xh), w = xn > 0.0 ? ex[h] / xn : 0.0;
             double qq = 0.0;
             if (h < AQS_JE_MAXH) xns[h] = xn;
+#ifdef RND_SSE2
+            { /* the six products two at a time, the sums in the scalar order */
+                const __m128d ab = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL)); /* fabs */
+                const __m128d x01 = _mm_loadu_pd(xh), x23 = _mm_loadu_pd(xh + 2), x45 = _mm_loadu_pd(xh + 4);
+                for (i = 0; i < d; i++) {
+                    const double *qr = QX + (int64_t)i * rows + 6 * h;
+                    const __m128d p01 = _mm_mul_pd(_mm_loadu_pd(qr), x01), p23 = _mm_mul_pd(_mm_loadu_pd(qr + 2), x23),
+                                  p45 = _mm_mul_pd(_mm_loadu_pd(qr + 4), x45);
+                    const __m128d b01 = _mm_and_pd(p01, ab), b23 = _mm_and_pd(p23, ab), b45 = _mm_and_pd(p45, ab);
+                    __m128d sa = _mm_add_sd(b01, _mm_unpackhi_pd(b01, b01)), sq6 = _mm_add_sd(p01, _mm_unpackhi_pd(p01, p01));
+                    sa = _mm_add_sd(_mm_add_sd(sa, b23), _mm_unpackhi_pd(b23, b23));
+                    sa = _mm_add_sd(_mm_add_sd(sa, b45), _mm_unpackhi_pd(b45, b45));
+                    sq6 = _mm_add_sd(_mm_add_sd(sq6, p23), _mm_unpackhi_pd(p23, p23));
+                    sq6 = _mm_add_sd(_mm_add_sd(sq6, p45), _mm_unpackhi_pd(p45, p45));
+                    a[i] += _mm_cvtsd_f64(sa);
+                    q[i] = _mm_cvtsd_f64(sq6);
+                    qq += q[i] * q[i];
+                }
+            }
+#else
             for (i = 0; i < d; i++) {
                 const double *qr = QX + (int64_t)i * rows + 6 * h;
                 const double p0 = qr[0] * xh[0], p1 = qr[1] * xh[1], p2 = qr[2] * xh[2], p3 = qr[3] * xh[3],
@@ -329,6 +349,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 q[i] = p0 + p1 + p2 + p3 + p4 + p5;
                 qq += q[i] * q[i];
             }
+#endif
             qe += w * sqrtn(qq);
         }
         for (i = 0; i < d; i++) sq += a[i] * a[i];
