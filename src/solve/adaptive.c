@@ -67,8 +67,7 @@ static void reset_outputs(aqs_linkage *L)
         for (i = 0; i < s->nprocessed; i++) {
             int32_t j = m->eff_joint[L->t.nodes[s->processed[i]].joint];
             const joint_def *jd = &L->joints[j];
-            const int nv = joint_nv(jd->type);
-            for (k = 0; k < nv; k++) L->qdd[jd->voff + k] = 0.0;
+            for (k = 0; k < joint_nv(jd->type); k++) L->qdd[jd->voff + k] = 0.0;
             for (k = 0; k < 6; k++) L->cforce[6 * j + k] = NAN;
         }
         for (i = 0; i < s->nreached; i++) {
