@@ -86,9 +86,8 @@ static void reset_outputs(aqs_linkage *L)
     s->tracked = 1; /* from here on the lists describe the outputs */
 }
 
-static double norm_qdd(const aqs_linkage *L, int32_t n)
+static double norm_qdd(const aqs_linkage *L, const joint_def *jd)
 {
-    const joint_def *jd = &L->joints[L->m.eff_joint[L->t.nodes[n].joint]];
     const double *qdd = L->qdd + jd->voff;
     const int nv = joint_nv(jd->type);
     double s = 0.0;
@@ -105,13 +104,14 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
     solve_state *s = &L->s;
     const node *nd = &L->t.nodes[n];
     int32_t child[2] = {nd->a, nd->b}, i, nk = 0;
-    const int counted = L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE;
+    const joint_def *jd = &L->joints[L->m.eff_joint[nd->joint]];
+    const int counted = jd->type != AQS_JOINT_FREE;
     dca_node_backsub(L, n);
     rounding_backsub(L, n, counted);
     if (worldbound_active(L)) worldbound_processed(L, n); /* children's world poses */
     s->processed[s->nprocessed++] = n;
     if (counted) {
-        double q = norm_qdd(L, n);
+        double q = norm_qdd(L, jd);
         s->computed++;
         s->comp_sq += q * q;
         if (q > s->lower) s->lower = q;
@@ -267,7 +267,10 @@ static void predict_next(aqs_linkage *L, double eps)
         double a, q;
         int k;
         if (!(s->pred[n] || nd->forced)) continue; /* evaluated when pushed */
-        q = L->joints[L->m.eff_joint[nd->joint]].type != AQS_JOINT_FREE ? norm_qdd(L, n) : 0.0;
+        {
+            const joint_def *jd = &L->joints[L->m.eff_joint[nd->joint]];
+            q = jd->type != AQS_JOINT_FREE ? norm_qdd(L, jd) : 0.0;
+        }
         a = q * q;
         for (k = 0; k < 2; k++)
             if (t->nodes[child[k]].joint >= 0) a += s->aval[child[k]];
