@@ -110,9 +110,12 @@ static void test_exact_same_answer(void **state)
  * same certified bound, and the same rounding estimate in every unit. The
  * solves are not bit for bit those of metres (x1000 is not exact in binary;
  * some of the DCA's choices, e.g. the frame of a node's relative mode, are
- * not unit-free), so the estimate is held to a factor 1.5 (it moved by
- * 230-650x before); at the powers of two, where every length, mass moment and
- * load is scaled exactly, to 1e-9 relative. */
+ * not unit-free), so the estimate is held to a factor 3 (it moved by
+ * 230-650x before; here it agrees to 3 digits, but ratios of terms to a
+ * result at rounding level, e.g. a grounded handle's b, can move it by 1.6x
+ * under perturbations at the rounding level: seen on a 4,000-atom molecule);
+ * at the powers of two, where every length, mass moment and load is scaled
+ * exactly, to 1e-9 relative. */
 static void test_adaptive_same_estimate(void **state)
 {
     static const int32_t metrics[] = {AQS_METRIC_ABS_LINKAGE, AQS_METRIC_REL_LINKAGE, AQS_METRIC_ABS_JOINT,
@@ -139,8 +142,8 @@ static void test_adaptive_same_estimate(void **state)
                     ref = st;
                 } else {
                     const double r = st.rounding_bound / ref.rounding_bound;
-                    const double tol = pow2 ? 1e-9 : 0.5;
-                    if (!(fabs(r - 1.0) <= tol))
+                    const int ok = pow2 ? fabs(r - 1.0) <= 1e-9 : r >= 1.0 / 3.0 && r <= 3.0;
+                    if (!ok)
                         fail_msg("backbone %d, metric %d, scale %g: rounding_bound %.4g against %.4g in metres",
                                  backbone, (int)metrics[mi], kScales[k], st.rounding_bound, ref.rounding_bound);
                     assert_int_equal(st.certified, ref.certified);
