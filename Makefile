@@ -238,6 +238,8 @@ check-hard: $(HARDCASES)
 	$(HARDCASES) --dca-form phi --json $(abspath $(BUILD))/hardcases-quick-phi.jsonl
 	AQS_SIMD=sse2 $(HARDCASES) --json $(abspath $(BUILD))/hardcases-quick-sse2.jsonl > /dev/null
 	cmp $(abspath $(BUILD))/hardcases-quick.jsonl $(abspath $(BUILD))/hardcases-quick-sse2.jsonl
+	@echo "== the same cases written in millimetres (--length-unit 1000)"
+	$(HARDCASES) --length-unit 1000 --json $(abspath $(BUILD))/hardcases-quick-mm.jsonl
 # The SIMD kernels of src/solve/dca.c, rounding.c, frames.c and src/base/dense.c against their scalar code (docs/testing.md): the
 # AVX kernels (where the processor has AVX), the SSE2 ones (AQS_SIMD=sse2: the path of a
 # processor without AVX) and the library built again with __SSE2__ undefined

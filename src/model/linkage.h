@@ -163,6 +163,12 @@ typedef struct {
     int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
     int32_t nquat;          /* joints with a quaternion (spherical, free) */
+    double length;          /* the linkage's length scale, m (model_build: the geometric mean
+                               of the joints' non-zero offsets in their parents' composites,
+                               else of the composites' radii of gyration, else 1): weighs
+                               linear against angular parts where the rounding estimate takes
+                               norms of spatial vectors, so that it does not depend on the
+                               unit of length (src/solve/rounding.c) */
 } model;
 
 /* A body's frame in its composite's frame. */

@@ -294,6 +294,35 @@ static aqs_status check_topology(aqs_linkage *L, int32_t *first_child, int32_t *
     return AQS_OK;
 }
 
+/* The linkage's length scale (model.length): the geometric mean of the
+ * effective joints' non-zero offsets in their parent composites' frames (the
+ * distances between consecutive joints; a log average, so that a few far
+ * joints, e.g. attached to the world far from its origin, weigh little),
+ * else of the composites' non-zero radii of gyration sqrt(trace(Ic) / 2m)
+ * (cmass: 13 per composite), else 1. It scales with the unit of length. */
+static double length_scale(const model *m, const double *cmass)
+{
+    double sum = 0.0;
+    int32_t e, c, n = 0;
+    for (e = 0; e < m->ne; e++) {
+        const double *p = m->eff_place[e].p, r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        if (r > 0.0 && isfinite(r)) {
+            sum += log(r);
+            n++;
+        }
+    }
+    if (n == 0)
+        for (c = 0; c < m->ncomp; c++) {
+            const double *mp = cmass + 13 * c;
+            const double r2 = mp[0] > 0.0 ? (mp[4] + mp[8] + mp[12]) / (2.0 * mp[0]) : 0.0;
+            if (r2 > 0.0 && isfinite(r2)) {
+                sum += 0.5 * log(r2);
+                n++;
+            }
+        }
+    return n > 0 ? exp(sum / n) : 1.0;
+}
+
 aqs_status model_build(aqs_linkage *L)
 {
     model *m = &L->m;
@@ -421,6 +450,7 @@ aqs_status model_build(aqs_linkage *L)
             pose_compose(&m->body_in_comp[j->parent], &place, &m->eff_place[e]);
         }
     }
+    m->length = length_scale(m, cmass);
     /* Members of each composite, parents first (for the fixed joints' forces). */
     m->members = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));
     m->member_start = lk_calloc(L, (size_t)m->ncomp + 2, sizeof(int32_t));

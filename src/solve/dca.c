@@ -1037,7 +1037,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
     }
 #endif
     memcpy(gamma, gw, sizeof gw);
-    rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, ncol, 0.0, bo);
+    rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, Tc, ncol, 0.0, bo);
     return 0;
 }
 
@@ -1275,12 +1275,19 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         /* the level of the reduction: Pa, Pb's size (the levers they carry)
          * times the cancellation in D = S^T V S */
         double pm = 0.0, dn = 0.0, dt = 0.0;
-        for (i = 0; i < 36; i++) pm = fmax(pm, fmax(fabs(Pa[i]), fabs(Pb[i])));
+        /* Pa, Pb map motions to motions: their entries weighed as the
+         * rounding estimate weighs motions (the linear parts by 1/l), so that
+         * pm does not depend on the unit of length (src/solve/rounding.c n6m) */
+        for (i = 0; i < 36; i++) {
+            const int r_lin = i / 6 >= 3, c_lin = i % 6 >= 3;
+            const double l = L->m.length > 0.0 ? L->m.length : 1.0, sc = r_lin == c_lin ? 1.0 : r_lin ? 1.0 / l : l;
+            pm = fmax(pm, fmax(fabs(Pa[i]), fabs(Pb[i])) * sc);
+        }
         for (r = 0; r < d; r++) {
             dn += D[7 * r];
             for (i = 0; i < 6; i++) dt += fabs(S[i * d + r] * VS[i * d + r]);
         }
-        rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, 0, pm * (dt / dn), bov);
+        rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, NULL, 0, pm * (dt / dn), bov);
     }
     return 0;
 }

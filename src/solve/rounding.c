@@ -67,9 +67,24 @@ static double sqrtn(double x)
     return sqrt(x);
 #endif
 }
-static double n6(const double *v)
+/* Norms of spatial vectors with their linear and angular parts weighed by
+ * the linkage's length scale l (model.length; il = 1/l): a motion vector
+ * [w; v] as |(w, v/l)|, a force vector [n; f] as |(n/l, f)|. Each then
+ * scales by one factor under a change of the unit of length, so the ratios
+ * below (cancellations, relative errors) do not depend on it; the plain
+ * 6-norm let the linear parts (motion) or the torques (force) dominate in
+ * millimetres and the other parts in kilometres, and moved the estimate by
+ * 200-600x (docs/math.md §10a, "The unit of length"). */
+static double inv_length(const aqs_linkage *L) { return L->m.length > 0.0 ? 1.0 / L->m.length : 1.0; }
+static double n6m(const double *v, double il)
 {
-    return sqrtn(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    const double x = v[3] * il, y = v[4] * il, z = v[5] * il;
+    return sqrtn(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + x * x + y * y + z * z);
+}
+static double n6f(const double *f, double il)
+{
+    const double x = f[0] * il, y = f[1] * il, z = f[2] * il;
+    return sqrtn(x * x + y * y + z * z + f[3] * f[3] + f[4] * f[4] + f[5] * f[5]);
 }
 /* max(1, terms / result): the growth of a relative error through a sum */
 static double ratio(double terms, double result)
@@ -105,9 +120,10 @@ static double wlevel(const double *k, const double *a, int n)
  * lane: E beta's entrywise sums four rows k at a time (the rows' 4 x 6 block
  * transposed so that lane k meets row k's entries in the order of j), then
  * the sums over k and i for j = 0..3 in one register and j = 4, 5 in
- * another, and sgam summed in j's order. E: c x 6, U: d x 6. */
+ * another, and sgam summed in j's order (each sum times its weight gw[j],
+ * as in rounding_node). E: c x 6, U: d x 6. */
 RND_TARGET_AVX static double gamma_sum_avx(const double *E, const double *beta, const double *U, const double *Q,
-                                           int32_t c, int32_t d)
+                                           int32_t c, int32_t d, const double *gw)
 {
     const __m256d ab = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL)); /* fabs */
     const __m128d ab2 = _mm256_castpd256_pd128(ab);
@@ -150,7 +166,10 @@ RND_TARGET_AVX static double gamma_sum_avx(const double *E, const double *beta, 
     }
     _mm256_storeu_pd(a6, lo);
     _mm_storeu_pd(a6 + 4, hi);
-    for (j = 0; j < 6; j++) sg += a6[j] * a6[j];
+    for (j = 0; j < 6; j++) {
+        const double a = a6[j] * gw[j];
+        sg += a * a;
+    }
     return sg;
 }
 #endif
@@ -167,15 +186,17 @@ static void child_levels(const tree *t, const node *c, double *k, double *kb)
 }
 
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
-                   const double *W, const double *beta, const double *Q, const double *Lc, int32_t ncol,
-                   double gpiv, const double *bo)
+                   const double *W, const double *beta, const double *Q, const double *Lc, const double *Tc,
+                   int32_t ncol, double gpiv, const double *bo)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
     const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const int32_t d = C->d, c = 6 - d, orows = 6 * C->nh;
     const double *FX = t->data + nd_W(C), *bC = t->data + C->bv, *bB = t->data + B->bv;
-    const double fu = RND_SAFETY * RND_U;
+    const double fu = RND_SAFETY * RND_U, il = inv_length(L);
+    /* gamma is a force: its torques weighed by 1/l, as in n6f */
+    const double gw[6] = {il, il, il, 1.0, 1.0, 1.0};
     double kA, kB, kbA, kbB, kappa, kb, kbeta, g = RND_G0, bn, srho = 0.0, sgam = 0.0, xa[6], eb[6];
     int32_t i, j, k, h;
 
@@ -186,7 +207,14 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     } else if (c > 0) {
         double pmax = 0.0, pmin = INFINITY;
         for (i = 0; i < c; i++) {
-            double p = fabs(Lc[(int64_t)i * ncol + i]);
+            /* constraint row i is Tc's column i applied to the relative
+             * acceleration: its linear part weighed by 1/l as in n6m (for a
+             * purely angular or linear direction the pivot of the row so
+             * weighed, exactly) */
+            const double *tc = Tc + i;
+            const double ta = tc[0] * tc[0] + tc[6] * tc[6] + tc[12] * tc[12],
+                         tl = (tc[18] * tc[18] + tc[24] * tc[24] + tc[30] * tc[30]) * il * il;
+            double p = fabs(Lc[(int64_t)i * ncol + i]) * sqrtn(ta + tl);
             pmax = maxd(pmax, p);
             if (p < pmin) pmin = p;
         }
@@ -200,10 +228,10 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     }
     kappa = maxd(kA, kB) + g;
     /* beta = X b^A_k - b^B_k: the children's levels weighted by their terms */
-    bn = n6(beta);
+    bn = n6m(beta, il);
     for (i = 0; i < 6; i++) xa[i] = beta[i] + bB[6 * C->kb + i];
     {
-        const double lv[2] = {kbA, kbB}, nt[2] = {n6(xa), n6(bB + 6 * C->kb)};
+        const double lv[2] = {kbA, kbB}, nt[2] = {n6m(xa, il), n6m(bB + 6 * C->kb, il)};
         kbeta = maxd(carry(wlevel(lv, nt, 2), ratio(maxd(nt[0], nt[1]), bn)), kappa);
     }
     /* b_C(h) = b_o(h) + X1E_h beta + X2_h K2^T Sd Q with X1 E = -FX^T: the
@@ -223,10 +251,10 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         lv[0] = h < A->nh - 1 ? kbA : kbB;
         lv[1] = kbeta;
         lv[2] = kappa;
-        nt[0] = n6(boh);
-        nt[1] = n6(v);
-        nt[2] = n6(w);
-        kb = maxd(kb, carry(maxd(wlevel(lv, nt, 3), kappa), ratio(maxd(maxd(nt[0], nt[1]), nt[2]), n6(bch))));
+        nt[0] = n6m(boh, il);
+        nt[1] = n6m(v, il);
+        nt[2] = n6m(w, il);
+        kb = maxd(kb, carry(maxd(wlevel(lv, nt, 3), kappa), ratio(maxd(maxd(nt[0], nt[1]), nt[2]), n6m(bch, il))));
     }
     /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
     for (i = 0; i < d; i++) {
@@ -237,7 +265,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     }
 #ifdef RND_AVX
     if (E && t->avx) {
-        sgam = gamma_sum_avx(E, beta, U, Q, c, d);
+        sgam = gamma_sum_avx(E, beta, U, Q, c, d, gw);
     } else
 #endif
     if (E) {
@@ -257,6 +285,8 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
                 for (i = 0; i < d; i++)
                     a = _mm_add_pd(a, _mm_and_pd(_mm_mul_pd(_mm_loadu_pd(U + 6 * i + j), _mm_set1_pd(Q[i])), ab));
                 _mm_storeu_pd(a2, a);
+                a2[0] *= gw[j];
+                a2[1] *= gw[j + 1];
                 sgam += a2[0] * a2[0];
                 sgam += a2[1] * a2[1];
             }
@@ -266,6 +296,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
             double a = 0.0;
             for (k = 0; k < c; k++) a += fabs(E[6 * k + j]) * eb[k];
             for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+            a *= gw[j];
             sgam += a * a;
         }
 #endif
@@ -274,6 +305,7 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
             double a = 0.0;
             for (k = 0; k < 6; k++) a += fabs(W[6 * j + k] * beta[k]);
             for (i = 0; i < d; i++) a += fabs(U[6 * i + j] * Q[i]);
+            a *= gw[j];
             sgam += a * a;
         }
     }
@@ -308,7 +340,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     node *C = &t->nodes[n];
     const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
-    const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K];
+    const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K], il = inv_length(L);
     double sq = 0.0, qe = 0.0, xns[AQS_JE_MAXH];
     int32_t h, i;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
@@ -318,7 +350,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         double a[6] = {0, 0, 0, 0, 0, 0}, q[6];
         for (h = 0; h < C->nh; h++) {
             const double *xh = x + 6 * h;
-            const double xn = n6(xh), w = xn > 0.0 ? ex[h] / xn : 0.0;
+            const double xn = n6f(xh, il), w = xn > 0.0 ? ex[h] / xn : 0.0;
             double qq = 0.0;
             if (h < AQS_JE_MAXH) xns[h] = xn;
 #ifdef RND_SSE2
@@ -362,12 +394,12 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const int all = worldbound_active(L), setA = all || A->joint >= 0, setB = all || B->joint >= 0;
         if (setA || setB) {
-            double ef = RN(t, C)[RND_GAM], sf = n6(t->data + nd_gamma(C)), *exA = t->rnd_x + A->handles,
+            double ef = RN(t, C)[RND_GAM], sf = n6f(t->data + nd_gamma(C), il), *exA = t->rnd_x + A->handles,
                    *exB = t->rnd_x + B->handles;
             int32_t ci;
             for (h = 0; h < C->nh; h++) {
                 const int32_t o = 6 * h;
-                const double xn = h < AQS_JE_MAXH ? xns[h] : n6(x + o);
+                const double xn = h < AQS_JE_MAXH ? xns[h] : n6f(x + o, il);
                 double v[6], vn;
                 if (xn == 0.0) continue;
                 for (i = 0; i < 6; i++) {
@@ -375,16 +407,16 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                     v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
                            fr[5] * x[o + 5];
                 }
-                vn = n6(v);
+                vn = n6f(v, il);
                 ef += ex[h] / xn * vn;
                 sf += vn;
             }
             ef += ku * sf;
             if (setA) {
-                const double fn = n6(L->cforce + 6 * L->m.eff_joint[C->joint]);
+                const double fn = n6f(L->cforce + 6 * L->m.eff_joint[C->joint], il);
                 for (i = 0, ci = 0; i < A->nh; i++) {
                     if (i == C->ka) {
-                        const double xk = n6(t->data + nd_xf(A) + 6 * i);
+                        const double xk = n6f(t->data + nd_xf(A) + 6 * i, il);
                         exA[i] = fn > 0.0 ? ef * maxd(1.0, xk / fn) : ef;
                     } else
                         exA[i] = ex[ci++];

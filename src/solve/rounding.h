@@ -17,15 +17,16 @@
 
 /* Node n (square-root form), at the end of its coefficients: U (d x 6), G2 =
  * Sd^T K2 K2^T Sd (d x d), E = Lc^-1 Tc^T (c x 6), beta, the joint force Q,
- * the constraint rows' factor Lc (its c pivots, row stride ncol) and the
- * outer handles' b. Reads the node's FX, b and mass properties and its
+ * the constraint rows' factor Lc (its c pivots, row stride ncol), the
+ * constraint directions Tc (6 x c, row stride 6: column i is row i of Lc's)
+ * and the outer handles' b. Reads the node's FX, b and mass properties and its
  * children's levels; sets n's rk, rkb, rerho, regam, resub.
  * The rigid join in inertia form (src/solve/dca.c, rigid_join) has no E or
- * Lc: it passes E = Lc = NULL, W = E^T E itself (6 x 6), and in gpiv the
+ * Lc: it passes E = Lc = Tc = NULL, W = E^T E itself (6 x 6), and in gpiv the
  * level of its reduction (for the others, the pivot ratio of Lc). */
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
-                   const double *W, const double *beta, const double *Q, const double *Lc, int32_t ncol,
-                   double gpiv, const double *bo);
+                   const double *W, const double *beta, const double *Q, const double *Lc, const double *Tc,
+                   int32_t ncol, double gpiv, const double *bo);
 /* Before a solve's back-substitution: the root's handle forces are exact,
  * the per-solve sums zero. */
 void rounding_solve_start(aqs_linkage *L);

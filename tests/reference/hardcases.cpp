@@ -3,7 +3,14 @@
 // of numerically hard linkages.
 //
 //   build/tests/reference/hardcases [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref quad|ld]
-//                                   [--dca-form sqrt|phi] [--seeds N]
+//                                   [--dca-form sqrt|phi] [--seeds N] [--length-unit S]
+//
+// --length-unit S: every case written in a unit of length 1/S m (S = 1000: millimetres, the
+// unit of most CAD models): positions, centres of mass, joint placements and prismatic
+// positions x S, inertias x S^2, gravity and forces x S, revolute joint torques x S^2. The
+// revolute joints' accelerations are the same physical answer, prismatic ones x S; each case
+// is checked against its own reference, with the same thresholds (`make check-hard` runs
+// S = 1000 too; docs/hardcases.md, "The unit of length").
 //
 // Quick mode (default; `make check-hard`, part of `make check`): sizes up to 2,000 links,
 // well under 60 s. Long mode (--long; `make bench-hard`): chains to 10^6 links (the
@@ -199,6 +206,7 @@ struct Case {
 };
 
 int32_t g_dca_form = AQS_DCA_FORM_SQRT;  // --dca-form: aqs_linkage_set_dca_form of every case
+double g_unit = 1.0;                     // --length-unit: lengths x g_unit (see the header)
 
 struct Builder {
     Case &c;
@@ -211,37 +219,58 @@ struct Builder {
         (void)what;
         if (ok()) c.build_error = aqs_linkage_last_error(c.l);
     }
+    std::vector<int32_t> types;  // of the joints added, in order (positions() scales by them)
     int32_t body(double m, const double com[3], double ixx, double iyy, double izz) {
-        const double I[9] = {ixx, 0, 0, 0, iyy, 0, 0, 0, izz};
+        const double s = g_unit, s2 = s * s;
+        const double I[9] = {ixx * s2, 0, 0, 0, iyy * s2, 0, 0, 0, izz * s2};
+        const double cs[3] = {com[0] * s, com[1] * s, com[2] * s};
         int32_t b = -1;
-        if (aqs_body_add(c.l, m, com, I, &b) != AQS_OK) fail("aqs_body_add");
+        if (aqs_body_add(c.l, m, cs, I, &b) != AQS_OK) fail("aqs_body_add");
         return b;
     }
     int32_t joint(int32_t type, int32_t parent, int32_t child, const double pos[3],
                   const double quat[4], const double axis[3]) {
+        const double ps[3] = {pos[0] * g_unit, pos[1] * g_unit, pos[2] * g_unit};
         int32_t j = -1;
-        if (ok() && aqs_joint_add(c.l, type, parent, child, pos, quat, axis, &j) != AQS_OK)
+        if (ok() && aqs_joint_add(c.l, type, parent, child, ps, quat, axis, &j) != AQS_OK)
             fail("aqs_joint_add");
+        types.push_back(type);
         return j;
     }
     void finalize() {
         if (ok() && aqs_linkage_finalize(c.l) != AQS_OK) fail("aqs_linkage_finalize");
     }
     void gravity(double x, double y, double z) {
-        c.loads.gravity[0] = x;
-        c.loads.gravity[1] = y;
-        c.loads.gravity[2] = z;
+        c.loads.gravity[0] = x * g_unit;
+        c.loads.gravity[1] = y * g_unit;
+        c.loads.gravity[2] = z * g_unit;
         if (ok() && aqs_linkage_set_gravity(c.l, c.loads.gravity) != AQS_OK) fail("set_gravity");
     }
     void force(int32_t b, double fx, double fy, double fz, double px, double py, double pz) {
-        hardref::BodyLoad f = {b, {fx, fy, fz}, {px, py, pz}, {0, 0, 0}};
+        const double s = g_unit;
+        hardref::BodyLoad f = {b, {fx * s, fy * s, fz * s}, {px * s, py * s, pz * s}, {0, 0, 0}};
         c.loads.body.push_back(f);
         if (ok() && aqs_body_set_force(c.l, b, f.force, f.point, f.torque) != AQS_OK)
             fail("set_force");
     }
-    void positions(const std::vector<double> &q) {
+    void positions(const std::vector<double> &q0) {
+        std::vector<double> q = q0;  // translations x g_unit: prismatic, and a free joint's first 3
+        size_t off = 0;
+        for (int32_t t : types) {
+            const size_t n = t == AQS_JOINT_FIXED ? 0 : t == AQS_JOINT_FREE ? 7 : 1;
+            if (t != AQS_JOINT_FIXED && t != AQS_JOINT_FREE && t != AQS_JOINT_REVOLUTE &&
+                t != AQS_JOINT_PRISMATIC)
+                throw std::runtime_error("Builder::positions: a joint type it does not scale");
+            for (size_t k = 0; k < (t == AQS_JOINT_PRISMATIC ? 1 : t == AQS_JOINT_FREE ? 3 : 0); ++k)
+                if (off + k < q.size()) q[off + k] *= g_unit;
+            off += n;
+        }
         if (ok() && aqs_linkage_set_positions(c.l, q.data(), q.size()) != AQS_OK)
             fail("set_positions");
+    }
+    // A joint force of joint j (revolute: N m, x S^2; prismatic: N, x S)
+    double joint_force(size_t j, double tau) const {
+        return tau * (types.at(j) == AQS_JOINT_PRISMATIC ? g_unit : g_unit * g_unit);
     }
 };
 
@@ -403,7 +432,7 @@ void build_tree(Case &c, uint64_t seed) {
     if (!B.ok()) return;
     c.loads.tau.resize(n);
     for (int j = 0; j < n; ++j) {
-        c.loads.tau[j] = r.uniform(-5, 5);
+        c.loads.tau[j] = B.joint_force((size_t)j, r.uniform(-5, 5));
         if (aqs_joint_set_force(c.l, j, &c.loads.tau[j], 1) != AQS_OK) B.fail("joint_set_force");
     }
 }
@@ -832,6 +861,13 @@ aqsref::Model dense_model(const hardref::ModelData &m, const hardref::Loads &L) 
 // Closed form: one revolute rod under gravity, qdd = m g_perp c / (Izz + m c^2) (signs from
 // the geometry), in __float128, against the quad ABA. Returns the relative difference.
 double pendulum_check() {
+    // in metres whatever --length-unit says: the closed form below is written in metres, and
+    // a model written in another unit rounds its inputs (0.01 x 1000^2) differently
+    struct UnitGuard {
+        double saved = g_unit;
+        UnitGuard() { g_unit = 1.0; }
+        ~UnitGuard() { g_unit = saved; }
+    } guard;
     Case c;
     c.family = "self";
     Builder B(c);
@@ -865,10 +901,11 @@ int main(int argc, char **argv) {
         else if (a == "--only" && i + 1 < argc) only = argv[++i];
         else if (a == "--ref" && i + 1 < argc) ref_kind = argv[++i];
         else if (a == "--seeds" && i + 1 < argc && std::atoi(argv[i + 1]) >= 1) nseeds = std::atoi(argv[++i]);
+        else if (a == "--length-unit" && i + 1 < argc && std::atof(argv[i + 1]) > 0.0) g_unit = std::atof(argv[++i]);
         else if (a == "--dca-form" && i + 1 < argc && (std::strcmp(argv[i + 1], "sqrt") == 0 || std::strcmp(argv[i + 1], "phi") == 0))
             g_dca_form = std::strcmp(argv[++i], "phi") == 0 ? AQS_DCA_FORM_PHI : AQS_DCA_FORM_SQRT;
         else {
-            std::fprintf(stderr, "usage: %s [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi] [--seeds N]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--long [--sweep]] [--json FILE] [--only SUBSTRING] [--ref auto|quad|ld] [--dca-form sqrt|phi] [--seeds N] [--length-unit S]\n", argv[0]);
             return 2;
         }
     }
