@@ -609,7 +609,7 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
  * row-major): columns q = 0 .. 5-d of Tc (row-major 6 x 6, column q). Gram-
  * Schmidt twice over S's columns, then over the unit vectors, taking the
  * largest remaining one each time. */
-static void complement(const double *S, int32_t d, double *Tc)
+static int32_t complement(const double *S, int32_t d, double *Tc)
 {
     double Q[36], v[6];
     int32_t nq = 0, i, j, k, pass;
@@ -634,7 +634,7 @@ static void complement(const double *S, int32_t d, double *Tc)
             Tc[6 * (h + 1) + 1] = sg + a[1] * a[1] * aa;
             Tc[6 * (h + 2) + 1] = -a[1];
             for (i = 0; i < 3; i++) Tc[6 * (o + i) + 2 + i] = 1.0;
-            return;
+            return h;
         }
     }
     for (j = 0; j < d + 6 && nq < 6; j++) {
@@ -674,6 +674,7 @@ static void complement(const double *S, int32_t d, double *Tc)
     }
     for (j = 0; j < 6 - d; j++)
         for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
+    return -1;
 }
 
 #ifdef DCA_AVX
@@ -1526,21 +1527,41 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     }
     /* In place, column by column: the c constraint rows Tc^T L_k, then the d
      * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
-    complement(S, d, Tc);
     {
+        const int32_t h = complement(S, d, Tc);
         /* the non-zero weights of each new row (a revolute or prismatic joint's
          * Tc and Sd are mostly zeros; skipping them changes no sum) */
         double wt[36];
         int32_t nz[6], ix[36];
-        for (q = 0; q < 6; q++) {
-            nz[q] = 0;
-            for (r = 0; r < 6; r++) {
-                const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
-                if (x == 0.0) continue;
-                wt[6 * q + nz[q]] = x;
-                ix[6 * q + nz[q]++] = r;
+        if (h >= 0 && Sd[3 - h] == 0.0 && Sd[4 - h] == 0.0 && Sd[5 - h] == 0.0) {
+            /* complement's revolute or prismatic axis in rows h .. h+2, and Sd
+             * there too: columns 0, 1 and Sd have their non-zeros in those rows,
+             * columns 2-4 one 1.0 each in the other half (the same tables) */
+            for (q = 0; q < 6; q++) {
+                nz[q] = 0;
+                if (q >= 2 && q < 5) {
+                    wt[6 * q] = Tc[6 * (3 - h + q - 2) + q];
+                    ix[6 * q] = 3 - h + q - 2;
+                    nz[q] = 1;
+                    continue;
+                }
+                for (r = h; r < h + 3; r++) {
+                    const double x = q < c ? Tc[6 * r + q] : Sd[r];
+                    if (x == 0.0) continue;
+                    wt[6 * q + nz[q]] = x;
+                    ix[6 * q + nz[q]++] = r;
+                }
             }
-        }
+        } else
+            for (q = 0; q < 6; q++) {
+                nz[q] = 0;
+                for (r = 0; r < 6; r++) {
+                    const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
+                    if (x == 0.0) continue;
+                    wt[6 * q + nz[q]] = x;
+                    ix[6 * q + nz[q]++] = r;
+                }
+            }
         j = 0;
 #ifdef DCA_SSE2
         if (nz[0] == 1 && nz[1] == 1 && nz[2] == 1 && nz[3] == 1 && nz[4] == 1 && nz[5] == 1) {
