@@ -861,6 +861,54 @@ DCA_TARGET_AVX static inline DCA_INLINE int32_t jc_outer_avx_body(const double *
     return o;
 }
 
+/* joint_coefficients' E = Lc^-1 Tc^T (c x 6) with AVX: columns 0-3 of E in one
+ * register, 4-5 in an SSE2 one, each lane the SSE2 loop's operations (x = Tc's
+ * entry, less Lc_ik E_kj for k = 0 .. i-1 in order, then / Lc_ii); -1 if an entry
+ * before its division is not finite (x * 0 is NaN only then). */
+DCA_TARGET_AVX static inline DCA_INLINE int jc_e_avx_body(const double *Tc, const double *Lc, int32_t ncol, int32_t c,
+                                                          double *E)
+{
+    __m256d e0[6], bad0 = _mm256_setzero_pd();
+    __m128d e1[6], bad1 = _mm_setzero_pd();
+    int32_t i, k;
+    for (i = 0; i < c; i++) {
+        const double *li = Lc + (int64_t)i * ncol;
+        double t[4];
+        __m256d x0;
+        __m128d x1;
+        t[0] = Tc[i];
+        t[1] = Tc[6 + i];
+        t[2] = Tc[12 + i];
+        t[3] = Tc[18 + i];
+        x0 = _mm256_loadu_pd(t);
+        x1 = _mm_loadh_pd(_mm_load_sd(Tc + 24 + i), Tc + 30 + i);
+        for (k = 0; k < i; k++) {
+            const __m256d l = _mm256_broadcast_sd(li + k);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, e0[k]));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), e1[k]));
+        }
+        bad0 = _mm256_add_pd(bad0, _mm256_mul_pd(x0, _mm256_setzero_pd()));
+        bad1 = _mm_add_pd(bad1, _mm_mul_pd(x1, _mm_setzero_pd()));
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            e0[i] = _mm256_div_pd(x0, p);
+            e1[i] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+        _mm256_storeu_pd(E + 6 * i, e0[i]);
+        _mm_storeu_pd(E + 6 * i + 4, e1[i]);
+    }
+    if (_mm256_movemask_pd(_mm256_cmp_pd(bad0, bad0, _CMP_UNORD_Q)) != 0 ||
+        _mm_movemask_pd(_mm_cmpunord_pd(bad1, bad1)) != 0)
+        return -1;
+    return 0;
+}
+
+DCA_TARGET_AVX static int jc_e_avx(const double *Tc, const double *Lc, int32_t ncol, int32_t c, double *E)
+{
+    if (c == 5) return jc_e_avx_body(Tc, Lc, ncol, 5, E);
+    return jc_e_avx_body(Tc, Lc, ncol, c, E);
+}
+
 /* the body for a revolute or prismatic joint (c = 5, d = 1) at the molecule's widths w as constants */
 DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
                                            int32_t w, const double *E, const double *Eb, const double *kq,
@@ -895,6 +943,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
      * is zero or not finite, or an entry before its division is not finite */
     for (i = 0; i < c; i++)
         if (!(fabs(Lc[(int64_t)i * ncol + i]) > 0.0)) return -1;
+#ifdef DCA_AVX
+    if (t->avx) {
+        if (jc_e_avx(Tc, Lc, ncol, c, E) != 0) return -1;
+    } else
+#endif
 #ifdef DCA_SSE2
     { /* two columns at a time, each lane as below; x * 0 is NaN only for x not finite */
         __m128d bad = _mm_setzero_pd();
