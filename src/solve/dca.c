@@ -605,6 +605,86 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     reflect_row_body(A, ld, r0, nrows, r, p, ncol, v, avx);
 }
 
+#ifdef DCA_AVX
+/* hybrid_phi's Z_A = Y_A (Lm^-1 Y_A)^T and Z_B = -Y_B (Lm^-1 Y_B)^T (see there)
+ * with AVX: A's and B's entries side by side in each 128-bit half as in the SSE2
+ * code, two columns of W = Lm^-1 Y (or two rows of Z) in the two halves; each
+ * lane the SSE2 code's operations in its order. Rows 2 and 3 of Z share a
+ * register, whose sums for the columns 3-5 run over 6 terms in row 3 and 3 in
+ * row 2: row 2's lanes add +0.0 for the last three (a sum started at +0.0 is
+ * never -0.0, so adding +0.0 changes nothing, not even a NaN). */
+DCA_TARGET_AVX static void relative_z_avx(const double *YA, const double *YB, const double *Lm, double *ZA,
+                                          double *ZB)
+{
+    __m128d Y2[36], W[36];
+    __m256d Y4[18];
+    int32_t i, j, r;
+    for (i = 0; i < 36; i += 4) {
+        const __m256d a = _mm256_loadu_pd(YA + i), b = _mm256_loadu_pd(YB + i);
+        const __m256d lo = _mm256_unpacklo_pd(a, b), hi = _mm256_unpackhi_pd(a, b); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+        _mm256_storeu_pd((double *)(Y2 + i), _mm256_permute2f128_pd(lo, hi, 0x20));
+        _mm256_storeu_pd((double *)(Y2 + i + 2), _mm256_permute2f128_pd(lo, hi, 0x31));
+    }
+    for (i = 0; i < 6; i++) { /* W's columns 0-1 in one register, 2 in an SSE2 one */
+        const double *li = Lm + 6 * i;
+        __m256d x0 = _mm256_loadu_pd((const double *)(Y2 + 6 * i));
+        __m128d x1 = Y2[6 * i + 2];
+        for (r = 0; r < i; r++) {
+            const __m256d l = _mm256_broadcast_sd(li + r);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, _mm256_loadu_pd((const double *)(W + 6 * r))));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), W[6 * r + 2]));
+        }
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            _mm256_storeu_pd((double *)(W + 6 * i), _mm256_div_pd(x0, p));
+            W[6 * i + 2] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+    }
+    for (i = 3; i < 6; i++) { /* columns 3-4, 5 over rows 3-5 */
+        const double *li = Lm + 6 * i;
+        __m256d x0 = _mm256_loadu_pd((const double *)(Y2 + 6 * i + 3));
+        __m128d x1 = Y2[6 * i + 5];
+        for (r = 3; r < i; r++) {
+            const __m256d l = _mm256_broadcast_sd(li + r);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, _mm256_loadu_pd((const double *)(W + 6 * r + 3))));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), W[6 * r + 5]));
+        }
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            _mm256_storeu_pd((double *)(W + 6 * i + 3), _mm256_div_pd(x0, p));
+            W[6 * i + 5] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+    }
+    for (i = 0; i < 3; i++) /* rows 2i, 2i+1 of Y side by side */
+        for (r = 0; r < 6; r++)
+            Y4[6 * i + r] = _mm256_insertf128_pd(_mm256_castpd128_pd256(Y2[12 * i + r]), Y2[12 * i + 6 + r], 1);
+    {
+        const __m256d neg = _mm256_set_pd(-0.0, 0.0, -0.0, 0.0);
+        const __m256d hi = _mm256_castsi256_pd(_mm256_set_epi64x(-1, -1, 0, 0));
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 6; j++) {
+                __m256d x = _mm256_setzero_pd();
+                __m128d h;
+                for (r = 0; r < 3; r++)
+                    x = _mm256_add_pd(x, _mm256_mul_pd(Y4[6 * i + r], _mm256_broadcast_pd(W + 6 * j + r)));
+                if (j >= 3 && i >= 1) {
+                    for (r = 3; r < 6; r++) {
+                        __m256d y = _mm256_mul_pd(Y4[6 * i + r], _mm256_broadcast_pd(W + 6 * j + r));
+                        if (i == 1) y = _mm256_and_pd(y, hi); /* row 2: +0.0 */
+                        x = _mm256_add_pd(x, y);
+                    }
+                }
+                x = _mm256_xor_pd(x, neg);
+                h = _mm256_extractf128_pd(x, 1);
+                _mm_storel_pd(ZA + 12 * i + j, _mm256_castpd256_pd128(x));
+                _mm_storeh_pd(ZB + 12 * i + j, _mm256_castpd256_pd128(x));
+                _mm_storel_pd(ZA + 12 * i + 6 + j, h);
+                _mm_storeh_pd(ZB + 12 * i + 6 + j, h);
+            }
+    }
+}
+#endif
+
 /* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
  * row-major): columns q = 0 .. 5-d of Tc (row-major 6 x 6, column q). Gram-
  * Schmidt twice over S's columns, then over the unit vectors, taking the
@@ -1453,6 +1533,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+#ifdef DCA_AVX
+        if (t->avx) relative_z_avx(YA, YB, Lm, ZA, ZB);
+        else
+#endif
 #ifdef DCA_SSE2
         { /* the same, A's sums in the low lanes and B's in the high ones */
             __m128d W[36], Y2[36];
