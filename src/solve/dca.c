@@ -813,6 +813,53 @@ DCA_TARGET_AVX static void xform_cols_avx(const pose *P, const double *Z, double
 }
 #endif
 
+#ifdef DCA_AVX
+/* out = -X_P Z for the n columns of Z (6 rows, row stride ldz; out's ld), four a
+ * register (the last ones masked: nothing read or written past column n): each
+ * lane spatial_xform_motion's arithmetic, then negated. */
+DCA_TARGET_AVX static void xform_cols_neg_avx(const pose *P, const double *Z, int32_t ldz, int32_t n, double *out,
+                                              int32_t ld)
+{
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    const __m256d neg = _mm256_set1_pd(-0.0);
+    int32_t j;
+    for (j = 0; j < n; j += 4) {
+        /* the last columns (n not a multiple of 4) through masked loads and stores */
+        const __m256i mk = _mm256_castpd_si256(_mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(n - j)), _CMP_LT_OQ));
+        const __m256d v0 = _mm256_maskload_pd(Z + j, mk), v1 = _mm256_maskload_pd(Z + ldz + j, mk),
+                      v2 = _mm256_maskload_pd(Z + (int64_t)2 * ldz + j, mk);
+        __m256d t0 = _mm256_maskload_pd(Z + (int64_t)3 * ldz + j, mk), t1 = _mm256_maskload_pd(Z + (int64_t)4 * ldz + j, mk),
+                t2 = _mm256_maskload_pd(Z + (int64_t)5 * ldz + j, mk);
+        const __m256d r0 = _mm256_broadcast_sd(R), r1 = _mm256_broadcast_sd(R + 1), r2 = _mm256_broadcast_sd(R + 2),
+                      r3 = _mm256_broadcast_sd(R + 3), r4 = _mm256_broadcast_sd(R + 4), r5 = _mm256_broadcast_sd(R + 5),
+                      r6 = _mm256_broadcast_sd(R + 6), r7 = _mm256_broadcast_sd(R + 7), r8 = _mm256_broadcast_sd(R + 8);
+        if (moved) {
+            const __m256d p0 = _mm256_broadcast_sd(p), p1 = _mm256_broadcast_sd(p + 1), p2 = _mm256_broadcast_sd(p + 2);
+            t0 = _mm256_sub_pd(t0, _mm256_sub_pd(_mm256_mul_pd(p1, v2), _mm256_mul_pd(p2, v1)));
+            t1 = _mm256_sub_pd(t1, _mm256_sub_pd(_mm256_mul_pd(p2, v0), _mm256_mul_pd(p0, v2)));
+            t2 = _mm256_sub_pd(t2, _mm256_sub_pd(_mm256_mul_pd(p0, v1), _mm256_mul_pd(p1, v0)));
+        }
+        _mm256_maskstore_pd(out + j, mk, _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, v0), _mm256_mul_pd(r3, v1)),
+                                                                  _mm256_mul_pd(r6, v2))));
+        _mm256_maskstore_pd(out + ld + j, mk, _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, v0), _mm256_mul_pd(r4, v1)),
+                                                                       _mm256_mul_pd(r7, v2))));
+        _mm256_maskstore_pd(out + (int64_t)2 * ld + j, mk,
+                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, v0), _mm256_mul_pd(r5, v1)),
+                                                          _mm256_mul_pd(r8, v2))));
+        _mm256_maskstore_pd(out + (int64_t)3 * ld + j, mk,
+                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, t0), _mm256_mul_pd(r3, t1)),
+                                                          _mm256_mul_pd(r6, t2))));
+        _mm256_maskstore_pd(out + (int64_t)4 * ld + j, mk,
+                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, t0), _mm256_mul_pd(r4, t1)),
+                                                          _mm256_mul_pd(r7, t2))));
+        _mm256_maskstore_pd(out + (int64_t)5 * ld + j, mk,
+                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, t0), _mm256_mul_pd(r5, t1)),
+                                                          _mm256_mul_pd(r8, t2))));
+    }
+}
+#endif
+
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
  * column by column: spatial_xform_motion's arithmetic, written out. */
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx)
@@ -1633,7 +1680,14 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     xform_cols(&PkbF, Lm, rel, ncol, t->avx);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
-    for (j = 0; j < a6; j++) {
+    j = 0;
+#ifdef DCA_AVX
+    if (t->avx) {
+        xform_cols_neg_avx(J, LA + (int64_t)6 * C->ka * ldA, ldA, a6, rel + 6, ncol);
+        j = a6;
+    }
+#endif
+    for (; j < a6; j++) {
         double col[6], o[6];
         for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
         spatial_xform_motion(J, col, o);
