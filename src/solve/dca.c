@@ -860,6 +860,27 @@ DCA_TARGET_AVX static void xform_cols_neg_avx(const pose *P, const double *Z, in
 }
 #endif
 
+#ifdef DCA_AVX
+/* hybrid_phi's projection of the relative rows for an axis-aligned S (each new
+ * row q one weighted row ix[6q], weight wt[6q]): x = 0.0 + w col, four columns
+ * a register (the last ones masked), over the first w columns of the 6 rows of
+ * rel (row stride ncol), in place. */
+DCA_TARGET_AVX static void project_axis_avx(double *rel, int32_t ncol, int32_t w, const double *wt, const int32_t *ix)
+{
+    const __m256d zero = _mm256_setzero_pd();
+    int32_t j, q, r;
+    for (j = 0; j < w; j += 4) {
+        const __m256i mk =
+            _mm256_castpd_si256(_mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(w - j)), _CMP_LT_OQ));
+        __m256d col[6];
+        for (r = 0; r < 6; r++) col[r] = _mm256_maskload_pd(rel + (int64_t)ncol * r + j, mk);
+        for (q = 0; q < 6; q++)
+            _mm256_maskstore_pd(rel + (int64_t)ncol * q + j, mk,
+                                _mm256_add_pd(zero, _mm256_mul_pd(_mm256_broadcast_sd(wt + 6 * q), col[ix[6 * q]])));
+    }
+}
+#endif
+
 /* out (6 x 6) = X_P Z for the motion transform X = spatial_from_parent(P),
  * column by column: spatial_xform_motion's arithmetic, written out. */
 static void xform_cols(const pose *P, const double *Z, double *out, int32_t ld, int avx)
@@ -1760,6 +1781,12 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
              * with its weights kept broadcast and its sums of one term written out */
             __m128d wq[6];
             const __m128d zero = _mm_setzero_pd();
+#ifdef DCA_AVX
+            if (t->avx) {
+                project_axis_avx(rel, ncol, w, wt, ix);
+                j = w;
+            }
+#endif
             for (q = 0; q < 6; q++) wq[q] = _mm_set1_pd(wt[6 * q]);
             for (; j + 1 < w; j += 2) {
                 __m128d col[6];
