@@ -1149,7 +1149,15 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
             for (k = c; k < w; k++) x += kr[k] * kj[k];
             G2[d * r + j] = G2[d * j + r] = x;
         }
-    for (k = c; k < w; k++) {
+    k = c;
+#ifdef DCA_SSE2
+    for (; k + 1 < w; k += 2) { /* two entries at a time, each sum as below */
+        __m128d x = _mm_setzero_pd();
+        for (r = 0; r < d; r++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(Kp + (int64_t)r * ncol + k), _mm_set1_pd(Q[r])));
+        _mm_storeu_pd(kq + k - c, x);
+    }
+#endif
+    for (; k < w; k++) {
         double x = 0.0;
         for (r = 0; r < d; r++) x += Kp[(int64_t)r * ncol + k] * Q[r];
         kq[k - c] = x;
