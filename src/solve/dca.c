@@ -154,8 +154,17 @@ static int mp_factor(const double *mp, double Jc[9], double *sm)
     const double m = mp[0], *Ic = mp + 4;
     double l00, l10, l11, l20, l21, l22, Li[9];
     int i, j;
+#ifdef DCA_SSE2
+    { /* the same test: x * 0 is NaN only for x not finite, and a sum of zeros is not NaN */
+        const __m128d z = _mm_setzero_pd();
+        __m128d b = _mm_mul_pd(_mm_load_sd(mp + 12), z);
+        for (i = 0; i < 12; i += 2) b = _mm_add_pd(b, _mm_mul_pd(_mm_loadu_pd(mp + i), z));
+        if (_mm_movemask_pd(_mm_cmpunord_pd(b, b)) != 0) return -1; /* a part 1e300 m out: its inertia overflowed */
+    }
+#else
     for (i = 0; i < 13; i++) /* a part 1e300 m out: its inertia overflowed */
         if (!isfinite(mp[i])) return -1;
+#endif
     if (!(m > 0.0)) return -1;
     l00 = Ic[0];
     if (!(l00 > 0.0)) return -1;
