@@ -170,8 +170,8 @@ void mat3_mul(const double A[9], const double B[9], double out[9])
     for (i = 0; i < 3; i++) {
         const double a0 = A[3 * i], a1 = A[3 * i + 1], a2 = A[3 * i + 2];
         const double x2 = a0 * B[2] + a1 * B[5] + a2 * B[8];
-        _mm_storeu_pd(out + 3 * i, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set1_pd(a0), b0), _mm_mul_pd(_mm_set1_pd(a1), b1)),
-                                              _mm_mul_pd(_mm_set1_pd(a2), b2)));
+        const __m128d s01 = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(a0), b0), _mm_mul_pd(_mm_set1_pd(a1), b1));
+        _mm_storeu_pd(out + 3 * i, _mm_add_pd(s01, _mm_mul_pd(_mm_set1_pd(a2), b2)));
         out[3 * i + 2] = x2;
     }
 #else

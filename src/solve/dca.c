@@ -835,36 +835,31 @@ DCA_TARGET_AVX static void xform_cols_neg_avx(const pose *P, const double *Z, in
     int32_t j;
     for (j = 0; j < n; j += 4) {
         /* the last columns (n not a multiple of 4) through masked loads and stores */
-        const __m256i mk = _mm256_castpd_si256(_mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(n - j)), _CMP_LT_OQ));
+        const __m256i mk = _mm256_castpd_si256(
+            _mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(n - j)), _CMP_LT_OQ));
         const __m256d v0 = _mm256_maskload_pd(Z + j, mk), v1 = _mm256_maskload_pd(Z + ldz + j, mk),
                       v2 = _mm256_maskload_pd(Z + (int64_t)2 * ldz + j, mk);
-        __m256d t0 = _mm256_maskload_pd(Z + (int64_t)3 * ldz + j, mk), t1 = _mm256_maskload_pd(Z + (int64_t)4 * ldz + j, mk),
+        __m256d t0 = _mm256_maskload_pd(Z + (int64_t)3 * ldz + j, mk),
+                t1 = _mm256_maskload_pd(Z + (int64_t)4 * ldz + j, mk),
                 t2 = _mm256_maskload_pd(Z + (int64_t)5 * ldz + j, mk);
-        const __m256d r0 = _mm256_broadcast_sd(R), r1 = _mm256_broadcast_sd(R + 1), r2 = _mm256_broadcast_sd(R + 2),
-                      r3 = _mm256_broadcast_sd(R + 3), r4 = _mm256_broadcast_sd(R + 4), r5 = _mm256_broadcast_sd(R + 5),
-                      r6 = _mm256_broadcast_sd(R + 6), r7 = _mm256_broadcast_sd(R + 7), r8 = _mm256_broadcast_sd(R + 8);
         if (moved) {
             const __m256d p0 = _mm256_broadcast_sd(p), p1 = _mm256_broadcast_sd(p + 1), p2 = _mm256_broadcast_sd(p + 2);
             t0 = _mm256_sub_pd(t0, _mm256_sub_pd(_mm256_mul_pd(p1, v2), _mm256_mul_pd(p2, v1)));
             t1 = _mm256_sub_pd(t1, _mm256_sub_pd(_mm256_mul_pd(p2, v0), _mm256_mul_pd(p0, v2)));
             t2 = _mm256_sub_pd(t2, _mm256_sub_pd(_mm256_mul_pd(p0, v1), _mm256_mul_pd(p1, v0)));
         }
-        _mm256_maskstore_pd(out + j, mk, _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, v0), _mm256_mul_pd(r3, v1)),
-                                                                  _mm256_mul_pd(r6, v2))));
-        _mm256_maskstore_pd(out + ld + j, mk, _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, v0), _mm256_mul_pd(r4, v1)),
-                                                                       _mm256_mul_pd(r7, v2))));
-        _mm256_maskstore_pd(out + (int64_t)2 * ld + j, mk,
-                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, v0), _mm256_mul_pd(r5, v1)),
-                                                          _mm256_mul_pd(r8, v2))));
-        _mm256_maskstore_pd(out + (int64_t)3 * ld + j, mk,
-                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, t0), _mm256_mul_pd(r3, t1)),
-                                                          _mm256_mul_pd(r6, t2))));
-        _mm256_maskstore_pd(out + (int64_t)4 * ld + j, mk,
-                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r1, t0), _mm256_mul_pd(r4, t1)),
-                                                          _mm256_mul_pd(r7, t2))));
-        _mm256_maskstore_pd(out + (int64_t)5 * ld + j, mk,
-                         _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r2, t0), _mm256_mul_pd(r5, t1)),
-                                                          _mm256_mul_pd(r8, t2))));
+/* -(R[a] x + R[a+3] y + R[a+6] z), summed as spatial_xform_motion sums it */
+#define DCA_XROW(a, x, y, z)                                                                                  \
+    _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_broadcast_sd(R + (a)), x),           \
+                                                   _mm256_mul_pd(_mm256_broadcast_sd(R + (a) + 3), y)),      \
+                                     _mm256_mul_pd(_mm256_broadcast_sd(R + (a) + 6), z)))
+        _mm256_maskstore_pd(out + j, mk, DCA_XROW(0, v0, v1, v2));
+        _mm256_maskstore_pd(out + ld + j, mk, DCA_XROW(1, v0, v1, v2));
+        _mm256_maskstore_pd(out + (int64_t)2 * ld + j, mk, DCA_XROW(2, v0, v1, v2));
+        _mm256_maskstore_pd(out + (int64_t)3 * ld + j, mk, DCA_XROW(0, t0, t1, t2));
+        _mm256_maskstore_pd(out + (int64_t)4 * ld + j, mk, DCA_XROW(1, t0, t1, t2));
+        _mm256_maskstore_pd(out + (int64_t)5 * ld + j, mk, DCA_XROW(2, t0, t1, t2));
+#undef DCA_XROW
     }
 }
 #endif
@@ -879,8 +874,8 @@ DCA_TARGET_AVX static void project_axis_avx(double *rel, int32_t ncol, int32_t w
     const __m256d zero = _mm256_setzero_pd();
     int32_t j, q, r;
     for (j = 0; j < w; j += 4) {
-        const __m256i mk =
-            _mm256_castpd_si256(_mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(w - j)), _CMP_LT_OQ));
+        const __m256i mk = _mm256_castpd_si256(
+            _mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(w - j)), _CMP_LT_OQ));
         __m256d col[6];
         for (r = 0; r < 6; r++) col[r] = _mm256_maskload_pd(rel + (int64_t)ncol * r + j, mk);
         for (q = 0; q < 6; q++)
@@ -1162,7 +1157,8 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
 #ifdef DCA_SSE2
     for (; k + 1 < w; k += 2) { /* two entries at a time, each sum as below */
         __m128d x = _mm_setzero_pd();
-        for (r = 0; r < d; r++) x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(Kp + (int64_t)r * ncol + k), _mm_set1_pd(Q[r])));
+        for (r = 0; r < d; r++)
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(Kp + (int64_t)r * ncol + k), _mm_set1_pd(Q[r])));
         _mm_storeu_pd(kq + k - c, x);
     }
 #endif
