@@ -1055,6 +1055,28 @@ DCA_TARGET_AVX static inline DCA_INLINE int jc_e_avx_body(const double *Tc, cons
     return 0;
 }
 
+/* joint_coefficients' gamma = E^T Eb + U^T Q: entries 0-3 in one register, 4-5 in an
+ * SSE2 one, each sum as the SSE2 loop's (from 0.0, E's terms, then U's) */
+DCA_TARGET_AVX static void jc_gamma_avx(const double *E, const double *Eb, const double *U, const double *Q, int32_t c,
+                                        int32_t d, double *gw)
+{
+    __m256d x0 = _mm256_setzero_pd();
+    __m128d x1 = _mm_setzero_pd();
+    int32_t k;
+    for (k = 0; k < c; k++) {
+        const __m256d b = _mm256_broadcast_sd(Eb + k);
+        x0 = _mm256_add_pd(x0, _mm256_mul_pd(_mm256_loadu_pd(E + 6 * k), b));
+        x1 = _mm_add_pd(x1, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 4), _mm256_castpd256_pd128(b)));
+    }
+    for (k = 0; k < d; k++) {
+        const __m256d q = _mm256_broadcast_sd(Q + k);
+        x0 = _mm256_add_pd(x0, _mm256_mul_pd(_mm256_loadu_pd(U + 6 * k), q));
+        x1 = _mm_add_pd(x1, _mm_mul_pd(_mm_loadu_pd(U + 6 * k + 4), _mm256_castpd256_pd128(q)));
+    }
+    _mm256_storeu_pd(gw, x0);
+    _mm_storeu_pd(gw + 4, x1);
+}
+
 DCA_TARGET_AVX static int jc_e_avx(const double *Tc, const double *Lc, int32_t ncol, int32_t c, double *E)
 {
     if (c == 5) return jc_e_avx_body(Tc, Lc, ncol, 5, E);
@@ -1236,6 +1258,10 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         rho[r] = x;
         if (!isfinite(x)) return -1;
     }
+#ifdef DCA_AVX
+    if (t->avx) jc_gamma_avx(E, Eb, U, Q, c, d, gw);
+    else
+#endif
 #ifdef DCA_SSE2
     for (i = 0; i < 6; i += 2) { /* two entries at a time, each sum as below */
         __m128d x = _mm_setzero_pd();
