@@ -3,6 +3,9 @@
 
 #include <math.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "dense.h"
 
@@ -160,10 +163,23 @@ double vec3_dot(const double a[3], const double b[3])
 
 void mat3_mul(const double A[9], const double B[9], double out[9])
 {
-    int i, j;
+    int i;
+#ifdef __SSE2__
+    /* columns 0 and 1 of a row in the two lanes, each entry's expression as below */
+    const __m128d b0 = _mm_loadu_pd(B), b1 = _mm_loadu_pd(B + 3), b2 = _mm_loadu_pd(B + 6);
+    for (i = 0; i < 3; i++) {
+        const double a0 = A[3 * i], a1 = A[3 * i + 1], a2 = A[3 * i + 2];
+        const double x2 = a0 * B[2] + a1 * B[5] + a2 * B[8];
+        const __m128d s01 = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(a0), b0), _mm_mul_pd(_mm_set1_pd(a1), b1));
+        _mm_storeu_pd(out + 3 * i, _mm_add_pd(s01, _mm_mul_pd(_mm_set1_pd(a2), b2)));
+        out[3 * i + 2] = x2;
+    }
+#else
+    int j;
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++)
             out[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+#endif
 }
 
 void mat3_vec(const double A[9], const double v[3], double out[3])

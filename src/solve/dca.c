@@ -154,8 +154,17 @@ static int mp_factor(const double *mp, double Jc[9], double *sm)
     const double m = mp[0], *Ic = mp + 4;
     double l00, l10, l11, l20, l21, l22, Li[9];
     int i, j;
+#ifdef DCA_SSE2
+    { /* the same test: x * 0 is NaN only for x not finite, and a sum of zeros is not NaN */
+        const __m128d z = _mm_setzero_pd();
+        __m128d b = _mm_mul_pd(_mm_load_sd(mp + 12), z);
+        for (i = 0; i < 12; i += 2) b = _mm_add_pd(b, _mm_mul_pd(_mm_loadu_pd(mp + i), z));
+        if (_mm_movemask_pd(_mm_cmpunord_pd(b, b)) != 0) return -1; /* a part 1e300 m out: its inertia overflowed */
+    }
+#else
     for (i = 0; i < 13; i++) /* a part 1e300 m out: its inertia overflowed */
         if (!isfinite(mp[i])) return -1;
+#endif
     if (!(m > 0.0)) return -1;
     l00 = Ic[0];
     if (!(l00 > 0.0)) return -1;
@@ -605,11 +614,91 @@ static void reflect_row(double *A, int32_t ld, int32_t r0, int32_t nrows, int32_
     reflect_row_body(A, ld, r0, nrows, r, p, ncol, v, avx);
 }
 
+#ifdef DCA_AVX
+/* hybrid_phi's Z_A = Y_A (Lm^-1 Y_A)^T and Z_B = -Y_B (Lm^-1 Y_B)^T (see there)
+ * with AVX: A's and B's entries side by side in each 128-bit half as in the SSE2
+ * code, two columns of W = Lm^-1 Y (or two rows of Z) in the two halves; each
+ * lane the SSE2 code's operations in its order. Rows 2 and 3 of Z share a
+ * register, whose sums for the columns 3-5 run over 6 terms in row 3 and 3 in
+ * row 2: row 2's lanes add +0.0 for the last three (a sum started at +0.0 is
+ * never -0.0, so adding +0.0 changes nothing, not even a NaN). */
+DCA_TARGET_AVX static void relative_z_avx(const double *YA, const double *YB, const double *Lm, double *ZA,
+                                          double *ZB)
+{
+    __m128d Y2[36], W[36];
+    __m256d Y4[18];
+    int32_t i, j, r;
+    for (i = 0; i < 36; i += 4) {
+        const __m256d a = _mm256_loadu_pd(YA + i), b = _mm256_loadu_pd(YB + i);
+        const __m256d lo = _mm256_unpacklo_pd(a, b), hi = _mm256_unpackhi_pd(a, b); /* (a0 b0 a2 b2), (a1 b1 a3 b3) */
+        _mm256_storeu_pd((double *)(Y2 + i), _mm256_permute2f128_pd(lo, hi, 0x20));
+        _mm256_storeu_pd((double *)(Y2 + i + 2), _mm256_permute2f128_pd(lo, hi, 0x31));
+    }
+    for (i = 0; i < 6; i++) { /* W's columns 0-1 in one register, 2 in an SSE2 one */
+        const double *li = Lm + 6 * i;
+        __m256d x0 = _mm256_loadu_pd((const double *)(Y2 + 6 * i));
+        __m128d x1 = Y2[6 * i + 2];
+        for (r = 0; r < i; r++) {
+            const __m256d l = _mm256_broadcast_sd(li + r);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, _mm256_loadu_pd((const double *)(W + 6 * r))));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), W[6 * r + 2]));
+        }
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            _mm256_storeu_pd((double *)(W + 6 * i), _mm256_div_pd(x0, p));
+            W[6 * i + 2] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+    }
+    for (i = 3; i < 6; i++) { /* columns 3-4, 5 over rows 3-5 */
+        const double *li = Lm + 6 * i;
+        __m256d x0 = _mm256_loadu_pd((const double *)(Y2 + 6 * i + 3));
+        __m128d x1 = Y2[6 * i + 5];
+        for (r = 3; r < i; r++) {
+            const __m256d l = _mm256_broadcast_sd(li + r);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, _mm256_loadu_pd((const double *)(W + 6 * r + 3))));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), W[6 * r + 5]));
+        }
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            _mm256_storeu_pd((double *)(W + 6 * i + 3), _mm256_div_pd(x0, p));
+            W[6 * i + 5] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+    }
+    for (i = 0; i < 3; i++) /* rows 2i, 2i+1 of Y side by side */
+        for (r = 0; r < 6; r++)
+            Y4[6 * i + r] = _mm256_insertf128_pd(_mm256_castpd128_pd256(Y2[12 * i + r]), Y2[12 * i + 6 + r], 1);
+    {
+        const __m256d neg = _mm256_set_pd(-0.0, 0.0, -0.0, 0.0);
+        const __m256d hi = _mm256_castsi256_pd(_mm256_set_epi64x(-1, -1, 0, 0));
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 6; j++) {
+                __m256d x = _mm256_setzero_pd();
+                __m128d h;
+                for (r = 0; r < 3; r++)
+                    x = _mm256_add_pd(x, _mm256_mul_pd(Y4[6 * i + r], _mm256_broadcast_pd(W + 6 * j + r)));
+                if (j >= 3 && i >= 1) {
+                    for (r = 3; r < 6; r++) {
+                        __m256d y = _mm256_mul_pd(Y4[6 * i + r], _mm256_broadcast_pd(W + 6 * j + r));
+                        if (i == 1) y = _mm256_and_pd(y, hi); /* row 2: +0.0 */
+                        x = _mm256_add_pd(x, y);
+                    }
+                }
+                x = _mm256_xor_pd(x, neg);
+                h = _mm256_extractf128_pd(x, 1);
+                _mm_storel_pd(ZA + 12 * i + j, _mm256_castpd256_pd128(x));
+                _mm_storeh_pd(ZB + 12 * i + j, _mm256_castpd256_pd128(x));
+                _mm_storel_pd(ZA + 12 * i + 6 + j, h);
+                _mm_storeh_pd(ZB + 12 * i + 6 + j, h);
+            }
+    }
+}
+#endif
+
 /* Orthonormal basis of the orthogonal complement of the columns of S (6 x d,
  * row-major): columns q = 0 .. 5-d of Tc (row-major 6 x 6, column q). Gram-
  * Schmidt twice over S's columns, then over the unit vectors, taking the
  * largest remaining one each time. */
-static void complement(const double *S, int32_t d, double *Tc)
+static int32_t complement(const double *S, int32_t d, double *Tc)
 {
     double Q[36], v[6];
     int32_t nq = 0, i, j, k, pass;
@@ -634,7 +723,7 @@ static void complement(const double *S, int32_t d, double *Tc)
             Tc[6 * (h + 1) + 1] = sg + a[1] * a[1] * aa;
             Tc[6 * (h + 2) + 1] = -a[1];
             for (i = 0; i < 3; i++) Tc[6 * (o + i) + 2 + i] = 1.0;
-            return;
+            return h;
         }
     }
     for (j = 0; j < d + 6 && nq < 6; j++) {
@@ -674,6 +763,7 @@ static void complement(const double *S, int32_t d, double *Tc)
     }
     for (j = 0; j < 6 - d; j++)
         for (i = 0; i < 6; i++) Tc[6 * i + j] = Q[6 * (d + j) + i];
+    return -1;
 }
 
 #ifdef DCA_AVX
@@ -728,6 +818,69 @@ DCA_TARGET_AVX static void xform_cols_avx(const pose *P, const double *Z, double
         _mm_storeu_pd(out + (int64_t)5 * ld + 4, _mm_add_pd(_mm_add_pd(_mm_mul_pd(DCA_LO(r2), t0), _mm_mul_pd(DCA_LO(r5), t1)),
                                                            _mm_mul_pd(DCA_LO(r8), t2)));
 #undef DCA_LO
+    }
+}
+#endif
+
+#ifdef DCA_AVX
+/* out = -X_P Z for the n columns of Z (6 rows, row stride ldz; out's ld), four a
+ * register (the last ones masked: nothing read or written past column n): each
+ * lane spatial_xform_motion's arithmetic, then negated. */
+DCA_TARGET_AVX static void xform_cols_neg_avx(const pose *P, const double *Z, int32_t ldz, int32_t n, double *out,
+                                              int32_t ld)
+{
+    const double *R = P->R, *p = P->p;
+    const int moved = p[0] != 0.0 || p[1] != 0.0 || p[2] != 0.0;
+    const __m256d neg = _mm256_set1_pd(-0.0);
+    int32_t j;
+    for (j = 0; j < n; j += 4) {
+        /* the last columns (n not a multiple of 4) through masked loads and stores */
+        const __m256i mk = _mm256_castpd_si256(
+            _mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(n - j)), _CMP_LT_OQ));
+        const __m256d v0 = _mm256_maskload_pd(Z + j, mk), v1 = _mm256_maskload_pd(Z + ldz + j, mk),
+                      v2 = _mm256_maskload_pd(Z + (int64_t)2 * ldz + j, mk);
+        __m256d t0 = _mm256_maskload_pd(Z + (int64_t)3 * ldz + j, mk),
+                t1 = _mm256_maskload_pd(Z + (int64_t)4 * ldz + j, mk),
+                t2 = _mm256_maskload_pd(Z + (int64_t)5 * ldz + j, mk);
+        if (moved) {
+            const __m256d p0 = _mm256_broadcast_sd(p), p1 = _mm256_broadcast_sd(p + 1), p2 = _mm256_broadcast_sd(p + 2);
+            t0 = _mm256_sub_pd(t0, _mm256_sub_pd(_mm256_mul_pd(p1, v2), _mm256_mul_pd(p2, v1)));
+            t1 = _mm256_sub_pd(t1, _mm256_sub_pd(_mm256_mul_pd(p2, v0), _mm256_mul_pd(p0, v2)));
+            t2 = _mm256_sub_pd(t2, _mm256_sub_pd(_mm256_mul_pd(p0, v1), _mm256_mul_pd(p1, v0)));
+        }
+/* -(R[a] x + R[a+3] y + R[a+6] z), summed as spatial_xform_motion sums it */
+#define DCA_XROW(a, x, y, z)                                                                                  \
+    _mm256_xor_pd(neg, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_broadcast_sd(R + (a)), x),           \
+                                                   _mm256_mul_pd(_mm256_broadcast_sd(R + (a) + 3), y)),      \
+                                     _mm256_mul_pd(_mm256_broadcast_sd(R + (a) + 6), z)))
+        _mm256_maskstore_pd(out + j, mk, DCA_XROW(0, v0, v1, v2));
+        _mm256_maskstore_pd(out + ld + j, mk, DCA_XROW(1, v0, v1, v2));
+        _mm256_maskstore_pd(out + (int64_t)2 * ld + j, mk, DCA_XROW(2, v0, v1, v2));
+        _mm256_maskstore_pd(out + (int64_t)3 * ld + j, mk, DCA_XROW(0, t0, t1, t2));
+        _mm256_maskstore_pd(out + (int64_t)4 * ld + j, mk, DCA_XROW(1, t0, t1, t2));
+        _mm256_maskstore_pd(out + (int64_t)5 * ld + j, mk, DCA_XROW(2, t0, t1, t2));
+#undef DCA_XROW
+    }
+}
+#endif
+
+#ifdef DCA_AVX
+/* hybrid_phi's projection of the relative rows for an axis-aligned S (each new
+ * row q one weighted row ix[6q], weight wt[6q]): x = 0.0 + w col, four columns
+ * a register (the last ones masked), over the first w columns of the 6 rows of
+ * rel (row stride ncol), in place. */
+DCA_TARGET_AVX static void project_axis_avx(double *rel, int32_t ncol, int32_t w, const double *wt, const int32_t *ix)
+{
+    const __m256d zero = _mm256_setzero_pd();
+    int32_t j, q, r;
+    for (j = 0; j < w; j += 4) {
+        const __m256i mk = _mm256_castpd_si256(
+            _mm256_cmp_pd(_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd((double)(w - j)), _CMP_LT_OQ));
+        __m256d col[6];
+        for (r = 0; r < 6; r++) col[r] = _mm256_maskload_pd(rel + (int64_t)ncol * r + j, mk);
+        for (q = 0; q < 6; q++)
+            _mm256_maskstore_pd(rel + (int64_t)ncol * q + j, mk,
+                                _mm256_add_pd(zero, _mm256_mul_pd(_mm256_broadcast_sd(wt + 6 * q), col[ix[6 * q]])));
     }
 }
 #endif
@@ -860,6 +1013,76 @@ DCA_TARGET_AVX static inline DCA_INLINE int32_t jc_outer_avx_body(const double *
     return o;
 }
 
+/* joint_coefficients' E = Lc^-1 Tc^T (c x 6) with AVX: columns 0-3 of E in one
+ * register, 4-5 in an SSE2 one, each lane the SSE2 loop's operations (x = Tc's
+ * entry, less Lc_ik E_kj for k = 0 .. i-1 in order, then / Lc_ii); -1 if an entry
+ * before its division is not finite (x * 0 is NaN only then). */
+DCA_TARGET_AVX static inline DCA_INLINE int jc_e_avx_body(const double *Tc, const double *Lc, int32_t ncol, int32_t c,
+                                                          double *E)
+{
+    __m256d e0[6], bad0 = _mm256_setzero_pd();
+    __m128d e1[6], bad1 = _mm_setzero_pd();
+    int32_t i, k;
+    for (i = 0; i < c; i++) {
+        const double *li = Lc + (int64_t)i * ncol;
+        double t[4];
+        __m256d x0;
+        __m128d x1;
+        t[0] = Tc[i];
+        t[1] = Tc[6 + i];
+        t[2] = Tc[12 + i];
+        t[3] = Tc[18 + i];
+        x0 = _mm256_loadu_pd(t);
+        x1 = _mm_loadh_pd(_mm_load_sd(Tc + 24 + i), Tc + 30 + i);
+        for (k = 0; k < i; k++) {
+            const __m256d l = _mm256_broadcast_sd(li + k);
+            x0 = _mm256_sub_pd(x0, _mm256_mul_pd(l, e0[k]));
+            x1 = _mm_sub_pd(x1, _mm_mul_pd(_mm256_castpd256_pd128(l), e1[k]));
+        }
+        bad0 = _mm256_add_pd(bad0, _mm256_mul_pd(x0, _mm256_setzero_pd()));
+        bad1 = _mm_add_pd(bad1, _mm_mul_pd(x1, _mm_setzero_pd()));
+        {
+            const __m256d p = _mm256_broadcast_sd(li + i);
+            e0[i] = _mm256_div_pd(x0, p);
+            e1[i] = _mm_div_pd(x1, _mm256_castpd256_pd128(p));
+        }
+        _mm256_storeu_pd(E + 6 * i, e0[i]);
+        _mm_storeu_pd(E + 6 * i + 4, e1[i]);
+    }
+    if (_mm256_movemask_pd(_mm256_cmp_pd(bad0, bad0, _CMP_UNORD_Q)) != 0 ||
+        _mm_movemask_pd(_mm_cmpunord_pd(bad1, bad1)) != 0)
+        return -1;
+    return 0;
+}
+
+/* joint_coefficients' gamma = E^T Eb + U^T Q: entries 0-3 in one register, 4-5 in an
+ * SSE2 one, each sum as the SSE2 loop's (from 0.0, E's terms, then U's) */
+DCA_TARGET_AVX static void jc_gamma_avx(const double *E, const double *Eb, const double *U, const double *Q, int32_t c,
+                                        int32_t d, double *gw)
+{
+    __m256d x0 = _mm256_setzero_pd();
+    __m128d x1 = _mm_setzero_pd();
+    int32_t k;
+    for (k = 0; k < c; k++) {
+        const __m256d b = _mm256_broadcast_sd(Eb + k);
+        x0 = _mm256_add_pd(x0, _mm256_mul_pd(_mm256_loadu_pd(E + 6 * k), b));
+        x1 = _mm_add_pd(x1, _mm_mul_pd(_mm_loadu_pd(E + 6 * k + 4), _mm256_castpd256_pd128(b)));
+    }
+    for (k = 0; k < d; k++) {
+        const __m256d q = _mm256_broadcast_sd(Q + k);
+        x0 = _mm256_add_pd(x0, _mm256_mul_pd(_mm256_loadu_pd(U + 6 * k), q));
+        x1 = _mm_add_pd(x1, _mm_mul_pd(_mm_loadu_pd(U + 6 * k + 4), _mm256_castpd256_pd128(q)));
+    }
+    _mm256_storeu_pd(gw, x0);
+    _mm_storeu_pd(gw + 4, x1);
+}
+
+DCA_TARGET_AVX static int jc_e_avx(const double *Tc, const double *Lc, int32_t ncol, int32_t c, double *E)
+{
+    if (c == 5) return jc_e_avx_body(Tc, Lc, ncol, 5, E);
+    return jc_e_avx_body(Tc, Lc, ncol, c, E);
+}
+
 /* the body for a revolute or prismatic joint (c = 5, d = 1) at the molecule's widths w as constants */
 DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_t orows, int32_t c, int32_t d,
                                            int32_t w, const double *E, const double *Eb, const double *kq,
@@ -894,6 +1117,11 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
      * is zero or not finite, or an entry before its division is not finite */
     for (i = 0; i < c; i++)
         if (!(fabs(Lc[(int64_t)i * ncol + i]) > 0.0)) return -1;
+#ifdef DCA_AVX
+    if (t->avx) {
+        if (jc_e_avx(Tc, Lc, ncol, c, E) != 0) return -1;
+    } else
+#endif
 #ifdef DCA_SSE2
     { /* two columns at a time, each lane as below; x * 0 is NaN only for x not finite */
         __m128d bad = _mm_setzero_pd();
@@ -947,7 +1175,16 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
             for (k = c; k < w; k++) x += kr[k] * kj[k];
             G2[d * r + j] = G2[d * j + r] = x;
         }
-    for (k = c; k < w; k++) {
+    k = c;
+#ifdef DCA_SSE2
+    for (; k + 1 < w; k += 2) { /* two entries at a time, each sum as below */
+        __m128d x = _mm_setzero_pd();
+        for (r = 0; r < d; r++)
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(Kp + (int64_t)r * ncol + k), _mm_set1_pd(Q[r])));
+        _mm_storeu_pd(kq + k - c, x);
+    }
+#endif
+    for (; k < w; k++) {
         double x = 0.0;
         for (r = 0; r < d; r++) x += Kp[(int64_t)r * ncol + k] * Q[r];
         kq[k - c] = x;
@@ -1021,6 +1258,10 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         rho[r] = x;
         if (!isfinite(x)) return -1;
     }
+#ifdef DCA_AVX
+    if (t->avx) jc_gamma_avx(E, Eb, U, Q, c, d, gw);
+    else
+#endif
 #ifdef DCA_SSE2
     for (i = 0; i < 6; i += 2) { /* two entries at a time, each sum as below */
         __m128d x = _mm_setzero_pd();
@@ -1406,6 +1647,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         for (i = 0; i < 6; i++)
             if (!(fabs(Lm[7 * i]) > 0.0) || !isfinite(Lm[7 * i])) return -1;
+#ifdef DCA_AVX
+        if (t->avx) relative_z_avx(YA, YB, Lm, ZA, ZB);
+        else
+#endif
 #ifdef DCA_SSE2
         { /* the same, A's sums in the low lanes and B's in the high ones */
             __m128d W[36], Y2[36];
@@ -1502,7 +1747,14 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     xform_cols(&PkbF, Lm, rel, ncol, t->avx);
     for (r = 0; r < 6; r++)
         for (j = 0; j < 6; j++) rel[ncol * r + j] = -rel[ncol * r + j];
-    for (j = 0; j < a6; j++) {
+    j = 0;
+#ifdef DCA_AVX
+    if (t->avx) {
+        xform_cols_neg_avx(J, LA + (int64_t)6 * C->ka * ldA, ldA, a6, rel + 6, ncol);
+        j = a6;
+    }
+#endif
+    for (; j < a6; j++) {
         double col[6], o[6];
         for (r = 0; r < 6; r++) col[r] = LA[(int64_t)(6 * C->ka + r) * ldA + j];
         spatial_xform_motion(J, col, o);
@@ -1533,21 +1785,41 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     }
     /* In place, column by column: the c constraint rows Tc^T L_k, then the d
      * rows Sd^T L_k (all the joint's coefficients read of the reflected L_k). */
-    complement(S, d, Tc);
     {
+        const int32_t h = complement(S, d, Tc);
         /* the non-zero weights of each new row (a revolute or prismatic joint's
          * Tc and Sd are mostly zeros; skipping them changes no sum) */
         double wt[36];
         int32_t nz[6], ix[36];
-        for (q = 0; q < 6; q++) {
-            nz[q] = 0;
-            for (r = 0; r < 6; r++) {
-                const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
-                if (x == 0.0) continue;
-                wt[6 * q + nz[q]] = x;
-                ix[6 * q + nz[q]++] = r;
+        if (h >= 0 && Sd[3 - h] == 0.0 && Sd[4 - h] == 0.0 && Sd[5 - h] == 0.0) {
+            /* complement's revolute or prismatic axis in rows h .. h+2, and Sd
+             * there too: columns 0, 1 and Sd have their non-zeros in those rows,
+             * columns 2-4 one 1.0 each in the other half (the same tables) */
+            for (q = 0; q < 6; q++) {
+                nz[q] = 0;
+                if (q >= 2 && q < 5) {
+                    wt[6 * q] = Tc[6 * (3 - h + q - 2) + q];
+                    ix[6 * q] = 3 - h + q - 2;
+                    nz[q] = 1;
+                    continue;
+                }
+                for (r = h; r < h + 3; r++) {
+                    const double x = q < c ? Tc[6 * r + q] : Sd[r];
+                    if (x == 0.0) continue;
+                    wt[6 * q + nz[q]] = x;
+                    ix[6 * q + nz[q]++] = r;
+                }
             }
-        }
+        } else
+            for (q = 0; q < 6; q++) {
+                nz[q] = 0;
+                for (r = 0; r < 6; r++) {
+                    const double x = q < c ? Tc[6 * r + q] : Sd[r * d + q - c];
+                    if (x == 0.0) continue;
+                    wt[6 * q + nz[q]] = x;
+                    ix[6 * q + nz[q]++] = r;
+                }
+            }
         j = 0;
 #ifdef DCA_SSE2
         if (nz[0] == 1 && nz[1] == 1 && nz[2] == 1 && nz[3] == 1 && nz[4] == 1 && nz[5] == 1) {
@@ -1555,6 +1827,12 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
              * with its weights kept broadcast and its sums of one term written out */
             __m128d wq[6];
             const __m128d zero = _mm_setzero_pd();
+#ifdef DCA_AVX
+            if (t->avx) {
+                project_axis_avx(rel, ncol, w, wt, ix);
+                j = w;
+            }
+#endif
             for (q = 0; q < 6; q++) wq[q] = _mm_set1_pd(wt[6 * q]);
             for (; j + 1 < w; j += 2) {
                 __m128d col[6];
