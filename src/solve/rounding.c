@@ -76,12 +76,17 @@ static double sqrtn(double x)
  * millimetres and the other parts in kilometres, and moved the estimate by
  * 200-600x (docs/math.md §10a, "The unit of length"). */
 static double inv_length(const aqs_linkage *L) { return L->m.length > 0.0 ? 1.0 / L->m.length : 1.0; }
-static double n6m(const double *v, double il)
+#if defined(__GNUC__)
+#define RND_INLINE __attribute__((always_inline)) /* n6m, n6f: called per handle and term */
+#else
+#define RND_INLINE
+#endif
+static inline RND_INLINE double n6m(const double *v, double il)
 {
     const double x = v[3] * il, y = v[4] * il, z = v[5] * il;
     return sqrtn(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + x * x + y * y + z * z);
 }
-static double n6f(const double *f, double il)
+static inline RND_INLINE double n6f(const double *f, double il)
 {
     const double x = f[0] * il, y = f[1] * il, z = f[2] * il;
     return sqrtn(x * x + y * y + z * z + f[3] * f[3] + f[4] * f[4] + f[5] * f[5]);
@@ -210,15 +215,15 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
             /* constraint row i is Tc's column i applied to the relative
              * acceleration: its linear part weighed by 1/l as in n6m (for a
              * purely angular or linear direction the pivot of the row so
-             * weighed, exactly) */
-            const double *tc = Tc + i;
+             * weighed, exactly); squared pivots, one square root below */
+            const double *tc = Tc + i, lc = Lc[(int64_t)i * ncol + i];
             const double ta = tc[0] * tc[0] + tc[6] * tc[6] + tc[12] * tc[12],
                          tl = (tc[18] * tc[18] + tc[24] * tc[24] + tc[30] * tc[30]) * il * il;
-            double p = fabs(Lc[(int64_t)i * ncol + i]) * sqrtn(ta + tl);
+            double p = lc * lc * (ta + tl);
             pmax = maxd(pmax, p);
             if (p < pmin) pmin = p;
         }
-        g += pmin > 0.0 ? pmax / pmin : INFINITY;
+        g += pmin > 0.0 ? sqrtn(pmax / pmin) : INFINITY;
     }
     /* heavy and light parts in one node: the square root of the children's
      * mass ratio (their mobilities' norms go like 1/sqrt(mass)) */
