@@ -7,23 +7,24 @@
  *
  * Counted, not timed: the choice then depends on counts only, so a run is
  * reproducible (the same positions and loads take the same path on every
- * machine and at any load). Calibrated 2026-12-02 by tools/calibrate_cost.py
- * --joints 5000 --steps 12 (docs/bench.md, "The automatic path"), gcc 12,
- * -O2 -funroll-loops. */
+ * machine and at any load). Calibrated 2026-12-03 by tools/calibrate_cost.py
+ * --joints 5000 --steps 12 (docs/bench.md, "The automatic path", recalibrated after the
+ * AVX and bit-for-bit node work: the square-root node 28.8 k -> 14.7 k), gcc 12,
+ * -O2 -funroll-loops, on a processor with AVX (the SSE2 path's node costs ~1.2x). */
 #ifndef AQS_COST_H
 #define AQS_COST_H
 
 /* An internal node's DCA coefficients (dca_node_update), by DCA form
  * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
-#define COST_DCA_NODE_SQRT 28790.0
+#define COST_DCA_NODE_SQRT 14710.0
 #define COST_DCA_NODE_PHI 9230.0
 /* An internal node's total-acceleration factor (totalacc_node_update). */
-#define COST_FACTOR 5360.0
+#define COST_FACTOR 5070.0
 /* A node processed by the adaptive solve: dca_node_backsub, one
  * totalacc_eval, one heap_push and heap_pop. */
 #define COST_PROCESS 1260.0
 /* A node moved by an adaptive step: joint_integrate, frames_node. */
-#define COST_MOVE 530.0
+#define COST_MOVE 490.0
 /* The exact solve by the articulated-body algorithm (aba_solve), per
  * effective joint. */
 #define COST_ABA_JOINT 1520.0
