@@ -5,6 +5,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "avx.h"
+
 /* AVX for the long reflections of dense_qr_append (dense_qr_append_simd):
  * compiled for AVX by a function attribute whatever the build's flags, run
  * only when the caller says the processor has it (the tree's flag, set by
@@ -329,16 +331,6 @@ static void reflect_columns(const double *a, int m, double tau, double *t, long 
  * column k's entries one i at a time), then f = tau sum; each column's
  * x[i] - f a[i] four entries at a time; then two columns in two lanes, and
  * one. Each column's arithmetic is that of the scalar loop. Returns ncols. */
-/* x[i] -= f a[i], four entries at a time */
-DENSE_TARGET_AVX static inline void axpy_avx(double *x, double f, const double *a, int m)
-{
-    const __m256d ff = _mm256_set1_pd(f);
-    int i;
-    for (i = 0; i + 3 < m; i += 4)
-        _mm256_storeu_pd(x + i, _mm256_sub_pd(_mm256_loadu_pd(x + i), _mm256_mul_pd(ff, _mm256_loadu_pd(a + i))));
-    for (; i < m; i++) x[i] -= f * a[i];
-}
-
 DENSE_TARGET_AVX static int reflect_long_avx(const double *a, int m, double tau, double *t, long ts, double *x,
                                              long xs, int ncols)
 {
@@ -367,23 +359,7 @@ DENSE_TARGET_AVX static int reflect_long_avx(const double *a, int m, double tau,
         t[ts] -= f[1];
         t[2 * ts] -= f[2];
         t[3 * ts] -= f[3];
-        {
-            const __m256d f0 = _mm256_broadcast_sd(f), f1 = _mm256_broadcast_sd(f + 1), f2 = _mm256_broadcast_sd(f + 2),
-                          f3 = _mm256_broadcast_sd(f + 3);
-            for (i = 0; i + 3 < m; i += 4) {
-                const __m256d va = _mm256_loadu_pd(a + i);
-                _mm256_storeu_pd(x0 + i, _mm256_sub_pd(_mm256_loadu_pd(x0 + i), _mm256_mul_pd(f0, va)));
-                _mm256_storeu_pd(x1 + i, _mm256_sub_pd(_mm256_loadu_pd(x1 + i), _mm256_mul_pd(f1, va)));
-                _mm256_storeu_pd(x2 + i, _mm256_sub_pd(_mm256_loadu_pd(x2 + i), _mm256_mul_pd(f2, va)));
-                _mm256_storeu_pd(x3 + i, _mm256_sub_pd(_mm256_loadu_pd(x3 + i), _mm256_mul_pd(f3, va)));
-            }
-            for (; i < m; i++) {
-                x0[i] -= f[0] * a[i];
-                x1[i] -= f[1] * a[i];
-                x2[i] -= f[2] * a[i];
-                x3[i] -= f[3] * a[i];
-            }
-        }
+        avx_axpy4(x0, x1, x2, x3, f, a, m);
     }
     if (c + 1 < ncols) { /* two columns: their sums in two lanes */
         double *x0 = x, *x1 = x + xs, f[2];
@@ -393,8 +369,8 @@ DENSE_TARGET_AVX static int reflect_long_avx(const double *a, int m, double tau,
         _mm_storeu_pd(f, _mm_mul_pd(_mm256_castpd256_pd128(tt), acc));
         t[0] -= f[0];
         t[ts] -= f[1];
-        axpy_avx(x0, f[0], a, m);
-        axpy_avx(x1, f[1], a, m);
+        avx_axpy1(x0, f[0], a, m);
+        avx_axpy1(x1, f[1], a, m);
         c += 2;
         t += 2 * ts;
         x += 2 * xs;
@@ -404,7 +380,7 @@ DENSE_TARGET_AVX static int reflect_long_avx(const double *a, int m, double tau,
         for (i = 0; i < m; i++) sum += a[i] * x[i];
         f = tau * sum;
         *t -= f;
-        axpy_avx(x, f, a, m);
+        avx_axpy1(x, f, a, m);
         c++;
     }
     return c;

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "avx.h"
 #include "dense.h"
 #include "frames.h"
 #include "model.h"
@@ -341,20 +342,6 @@ static inline void axpy4(double *a, double *b, double *g, double *h, double s, d
 }
 
 #ifdef DCA_AVX
-/* axpy1 four entries at a time */
-DCA_TARGET_AVX static inline DCA_INLINE void axpy1_avx(double *a, double s, const double *v, int32_t m)
-{
-    const __m256d ss = _mm256_set1_pd(s);
-    int32_t j = 0;
-    for (; j + 3 < m; j += 4)
-        _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(ss, _mm256_loadu_pd(v + j))));
-    if (j + 1 < m) {
-        _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(ss), _mm_loadu_pd(v + j))));
-        j += 2;
-    }
-    if (j < m) a[j] -= s * v[j];
-}
-
 /* reflect_row_body's row updates (rows i .. nrows-1, f = 2 / v^T v) with AVX,
  * each row's arithmetic that of the scalar loops: four rows' sums in the four
  * lanes of one register, each summed in column order from 0.0 (a 4 x 4 block of
@@ -390,34 +377,12 @@ DCA_TARGET_AVX static inline DCA_INLINE void reflect_apply_avx_body(double *A, i
         acc = _mm256_mul_pd(acc, ff);
         _mm256_storeu_pd(s, acc);
         if (_mm256_movemask_pd(_mm256_cmp_pd(acc, zero, _CMP_EQ_OQ)) == 0) {
-            const __m256d sa = _mm256_broadcast_sd(s), sb = _mm256_broadcast_sd(s + 1), sg = _mm256_broadcast_sd(s + 2),
-                          sh = _mm256_broadcast_sd(s + 3);
-            for (j = 0; j + 3 < m; j += 4) {
-                const __m256d vv = _mm256_loadu_pd(v + j);
-                _mm256_storeu_pd(a + j, _mm256_sub_pd(_mm256_loadu_pd(a + j), _mm256_mul_pd(sa, vv)));
-                _mm256_storeu_pd(b + j, _mm256_sub_pd(_mm256_loadu_pd(b + j), _mm256_mul_pd(sb, vv)));
-                _mm256_storeu_pd(g + j, _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(sg, vv)));
-                _mm256_storeu_pd(h + j, _mm256_sub_pd(_mm256_loadu_pd(h + j), _mm256_mul_pd(sh, vv)));
-            }
-            if (j + 1 < m) {
-                const __m128d vv = _mm_loadu_pd(v + j);
-                _mm_storeu_pd(a + j, _mm_sub_pd(_mm_loadu_pd(a + j), _mm_mul_pd(_mm256_castpd256_pd128(sa), vv)));
-                _mm_storeu_pd(b + j, _mm_sub_pd(_mm_loadu_pd(b + j), _mm_mul_pd(_mm256_castpd256_pd128(sb), vv)));
-                _mm_storeu_pd(g + j, _mm_sub_pd(_mm_loadu_pd(g + j), _mm_mul_pd(_mm256_castpd256_pd128(sg), vv)));
-                _mm_storeu_pd(h + j, _mm_sub_pd(_mm_loadu_pd(h + j), _mm_mul_pd(_mm256_castpd256_pd128(sh), vv)));
-                j += 2;
-            }
-            if (j < m) {
-                a[j] -= s[0] * v[j];
-                b[j] -= s[1] * v[j];
-                g[j] -= s[2] * v[j];
-                h[j] -= s[3] * v[j];
-            }
+            avx_axpy4(a, b, g, h, s, v, m);
         } else {
-            if (s[0] != 0.0) axpy1_avx(a, s[0], v, m);
-            if (s[1] != 0.0) axpy1_avx(b, s[1], v, m);
-            if (s[2] != 0.0) axpy1_avx(g, s[2], v, m);
-            if (s[3] != 0.0) axpy1_avx(h, s[3], v, m);
+            if (s[0] != 0.0) avx_axpy1(a, s[0], v, m);
+            if (s[1] != 0.0) avx_axpy1(b, s[1], v, m);
+            if (s[2] != 0.0) avx_axpy1(g, s[2], v, m);
+            if (s[3] != 0.0) avx_axpy1(h, s[3], v, m);
         }
     }
     for (; i + 1 < nrows; i += 2) {
@@ -428,15 +393,15 @@ DCA_TARGET_AVX static inline DCA_INLINE void reflect_apply_avx_body(double *A, i
         acc = _mm_mul_pd(acc, _mm256_castpd256_pd128(ff));
         _mm_storel_pd(&s, acc);
         _mm_storeh_pd(&t, acc);
-        if (s != 0.0) axpy1_avx(a, s, v, m);
-        if (t != 0.0) axpy1_avx(b, t, v, m);
+        if (s != 0.0) avx_axpy1(a, s, v, m);
+        if (t != 0.0) avx_axpy1(b, t, v, m);
     }
     if (i < nrows) {
         double *a = A + (int64_t)ld * i + p, s = 0.0;
         for (j = 0; j < m; j++) s += a[j] * v[j];
         if (s == 0.0) return;
         s *= f;
-        axpy1_avx(a, s, v, m);
+        avx_axpy1(a, s, v, m);
     }
 }
 
