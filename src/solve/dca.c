@@ -1509,6 +1509,28 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
  * constraint force (Lc singular); 1, having written nothing but the composite
  * inertia, when both sides are rigid and rigid_join_wanted: the caller then
  * takes rigid_join (called from there, so that it is not inlined here). */
+/* Row q of the rows x ncol matrix M has a zero at its pivot column p: the
+ * column in (p, end) where row q's entry is largest swapped into p (every
+ * row), so the reflection's vector stays within row q's non-zeros and rows
+ * with no non-zero in common with it are left exactly as they are. */
+static void pivot_column(double *M, int32_t ncol, int32_t q, int32_t rows, int32_t p, int32_t end)
+{
+    const double *mq = M + (int64_t)q * ncol;
+    double best = 0.0;
+    int32_t j, r, s = -1;
+    for (j = p + 1; j < end; j++)
+        if (fabs(mq[j]) > best) {
+            best = fabs(mq[j]);
+            s = j;
+        }
+    if (s < 0) return;
+    for (r = 0; r < rows; r++) {
+        double *mr = M + (int64_t)r * ncol, x = mr[p];
+        mr[p] = mr[s];
+        mr[s] = x;
+    }
+}
+
 static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
                       const double *Q)
 {
@@ -1826,7 +1848,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
     }
     /* (the rows above q are reduced already: zero from column q on) */
-    for (q = 0; q < c; q++) reflect_row(M, ncol, q, rows, q, q, w, v, t->avx);
+    for (q = 0; q < c; q++) {
+        if (M[(int64_t)q * ncol + q] == 0.0) pivot_column(M, ncol, q, rows, q, w);
+        reflect_row(M, ncol, q, rows, q, q, w, v, t->avx);
+    }
     {
         /* b of the outer handles, in C's handle order */
         double *bo = v + ncol, *kq = bo + orows; /* after the reflection vector */
@@ -1845,7 +1870,10 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
-        for (i = 0; i < orows; i++) reflect_row(X, ncol, i, orows, i, c + i, ncol, v, t->avx);
+        for (i = 0; i < orows; i++) {
+            if (X[(int64_t)i * ncol + c + i] == 0.0) pivot_column(X, ncol, i, orows, c + i, ncol);
+            reflect_row(X, ncol, i, orows, i, c + i, ncol, v, t->avx);
+        }
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
     }
