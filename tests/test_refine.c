@@ -663,65 +663,78 @@ static void test_rounding_fallback(void **state)
  * (a reflection whose pivot entry was an exact zero), so the out-of-plane
  * accelerations, exactly zero, came out at u x the in-plane ones, and the
  * chain's out-of-plane stiffness (a rod of n links) turned them into moments
- * that leaked back (docs/math.md §13a). Checked: every internal node's b and
- * handle forces keep exact zeros out of the plane (rotation about x and y,
- * translation along z: all frames of the straight chain are axis-aligned),
+ * that leaked back (docs/math.md §13a). In three orientations (axes z, y, x),
+ * checked: every internal node's b and handle forces keep exact zeros out of
+ * the plane (rotations about the other two axes, translation along the axis:
+ * all frames of the straight chain are axis-aligned),
  * and the far joints' accelerations are below 1e-100 (the unrefined solve);
  * refined and unrefined are within 1e-15 of the ABA in the 2-norm. */
 static void test_planar_far_field(void **state)
 {
+    /* the chain's axis, its direction and gravity's: (z, x, -y) is hardcases' chain */
+    static const int32_t orient[3][3] = {{2, 0, 1}, {1, 0, 2}, {0, 1, 2}};
     const int32_t n = 3000;
-    const double com[3] = {0.5, 0, 0}, I[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1}, g[3] = {0, -9.81, 0};
-    aqs_linkage *L = NULL;
     double *qa = malloc(sizeof(double) * (size_t)n), *qd = malloc(sizeof(double) * (size_t)n);
-    int32_t prev = AQS_WORLD, b, i, pass, k;
+    int32_t o;
     (void)state;
     assert_non_null(qa);
     assert_non_null(qd);
-    assert_int_equal(aqs_linkage_create(&L), AQS_OK);
-    for (i = 0; i < n; i++) {
-        assert_int_equal(aqs_body_add(L, 1.0, com, I, &b), AQS_OK);
-        test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, i ? 1.0 : 0.0, 0, 0, 0, 0, 1);
-        prev = b;
-    }
-    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
-    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA */
-    assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)n), AQS_OK);
-    assert_true(fabs(qa[0]) > 10.0);
-    for (i = 1000; i < n; i++) assert_true(fabs(qa[i]) < 1e-120);
-    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
-    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-    for (pass = 0; pass < 2; pass++) {
-        const tree *t = &L->t;
-        assert_int_equal(aqs_linkage_set_exact_refinement(L, pass ? 3 : 0), AQS_OK);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)n), AQS_OK);
-        /* the base's rotation: the same to 1e-14 as the ABA's; the whole answer to 1e-15
-         * (2-norm, relative: 10x the ABA's own error against hardcases' reference) */
-        assert_true(fabs(qd[0] - qa[0]) <= 1e-14 * fabs(qa[0]));
-        for (i = 0; i < n; i++) qd[i] -= qa[i];
-        assert_true(norm2(qd, (size_t)n) <= 1e-15 * norm2(qa, (size_t)n));
-        for (i = 0; i < n; i++) qd[i] += qa[i];
-        /* the refinement's corrections carry the residual's own rounding (5.9e-20 at joint
-         * 1,000 here, 5e-21 of the base's): the far field and the nodes' zeros are the
-         * unrefined solve's, which the corrections leave in place (docs/math.md §13a) */
-        if (pass) continue;
-        for (i = 1000; i < n; i++)
-            if (!(fabs(qd[i]) < 1e-100)) fail_msg("pass %d: joint %d: %.3e (ABA %.3e)", pass, (int)i, qd[i], qa[i]);
-        for (i = 0; i < t->nnodes; i++) {
-            const node *nd = &t->nodes[i];
-            const double *bv = t->data + nd->bv, *x = t->data + nd_xf(nd);
-            if (nd->joint < 0) continue;
-            for (k = 0; k < nd->nh; k++)
-                if (bv[6 * k] != 0.0 || bv[6 * k + 1] != 0.0 || bv[6 * k + 5] != 0.0 || x[6 * k] != 0.0 ||
-                    x[6 * k + 1] != 0.0 || x[6 * k + 5] != 0.0)
-                    fail_msg("pass %d: node %d handle %d: b (%.2e %.2e %.2e) x (%.2e %.2e %.2e) out of the plane",
-                             pass, (int)i, (int)k, bv[6 * k], bv[6 * k + 1], bv[6 * k + 5], x[6 * k], x[6 * k + 1],
-                             x[6 * k + 5]);
+    for (o = 0; o < 3; o++) {
+        const int32_t ax = orient[o][0], dir = orient[o][1], gd = orient[o][2];
+        double com[3] = {0, 0, 0}, I[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1}, g[3] = {0, 0, 0}, a[3] = {0, 0, 0};
+        aqs_linkage *L = NULL;
+        int32_t prev = AQS_WORLD, b, i, pass, k, r;
+        com[dir] = 0.5;
+        g[gd] = -9.81;
+        a[ax] = 1.0;
+        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+        for (i = 0; i < n; i++) {
+            double p[3] = {0, 0, 0};
+            p[dir] = i ? 1.0 : 0.0;
+            assert_int_equal(aqs_body_add(L, 1.0, com, I, &b), AQS_OK);
+            test_add_joint(L, AQS_JOINT_REVOLUTE, prev, b, p[0], p[1], p[2], a[0], a[1], a[2]);
+            prev = b;
         }
+        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA */
+        assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)n), AQS_OK);
+        assert_true(fabs(qa[0]) > 10.0);
+        for (i = 1000; i < n; i++) assert_true(fabs(qa[i]) < 1e-120);
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+        for (pass = 0; pass < 2; pass++) {
+            const tree *t = &L->t;
+            assert_int_equal(aqs_linkage_set_exact_refinement(L, pass ? 3 : 0), AQS_OK);
+            assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+            assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)n), AQS_OK);
+            /* the base's rotation: the same to 1e-14 as the ABA's; the whole answer to 1e-15
+             * (2-norm, relative: 10x the ABA's own error against hardcases' reference) */
+            assert_true(fabs(qd[0] - qa[0]) <= 1e-14 * fabs(qa[0]));
+            for (i = 0; i < n; i++) qd[i] -= qa[i];
+            assert_true(norm2(qd, (size_t)n) <= 1e-15 * norm2(qa, (size_t)n));
+            for (i = 0; i < n; i++) qd[i] += qa[i];
+            /* the refinement's corrections carry the residual's own rounding (5.9e-20 at joint
+             * 1,000 here, 5e-21 of the base's): the far field and the nodes' zeros are the
+             * unrefined solve's, which the corrections leave in place (docs/math.md §13a) */
+            if (pass) continue;
+            for (i = 1000; i < n; i++)
+                if (!(fabs(qd[i]) < 1e-100))
+                    fail_msg("axis %d: joint %d: %.3e (ABA %.3e)", (int)ax, (int)i, qd[i], qa[i]);
+            for (i = 0; i < t->nnodes; i++) {
+                const node *nd = &t->nodes[i];
+                const double *bv = t->data + nd->bv, *x = t->data + nd_xf(nd);
+                if (nd->joint < 0) continue;
+                /* out of the plane: rotations about the two other axes, translation along ax */
+                for (k = 0; k < nd->nh; k++)
+                    for (r = 0; r < 6; r++)
+                        if ((r < 3 ? r != ax : r == 3 + ax) && (bv[6 * k + r] != 0.0 || x[6 * k + r] != 0.0))
+                            fail_msg("axis %d: node %d handle %d component %d: b %.2e x %.2e out of the plane",
+                                     (int)ax, (int)i, (int)k, (int)r, bv[6 * k + r], x[6 * k + r]);
+            }
+        }
+        aqs_linkage_destroy(L);
     }
-    aqs_linkage_destroy(L);
     free(qa);
     free(qd);
 }

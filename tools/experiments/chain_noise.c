@@ -1,5 +1,5 @@
 /* chain_noise.c -- where the exact DCA's error on the straight chain under gravity
- * sits (docs/math.md 13a, "Where that error sits"): the hardcases chain (1 kg, 1 m links,
+ * sits (docs/math.md 13a, "Where that error sat"): the hardcases chain (1 kg, 1 m links,
  * revolute about z, gravity -y), the ABA against the unrefined and the refined exact DCA,
  * the error by tenths of the chain. Build against the library:
  *   gcc -O2 -Iinclude tools/experiments/chain_noise.c -Lbuild -Wl,-rpath,$PWD/build -laqs -lm
