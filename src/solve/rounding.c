@@ -261,12 +261,18 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         nt[2] = n6m(w, il);
         kb = maxd(kb, carry(maxd(wlevel(lv, nt, 3), kappa), ratio(maxd(maxd(nt[0], nt[1]), nt[2]), n6m(bch, il))));
     }
-    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
-    for (i = 0; i < d; i++) {
-        double a = 0.0;
-        for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
-        for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
-        srho += a * a;
+    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums;
+     * a free joint's rho [dw; dv] as |(dw, dv / l)| (n6m: the world
+     * measures, its one reader, docs/math.md §10b) */
+    {
+        const int fj = d == 6 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE;
+        for (i = 0; i < d; i++) {
+            double a = 0.0;
+            for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
+            for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
+            if (fj && i >= 3) a *= il;
+            srho += a * a;
+        }
     }
 #ifdef RND_AVX
     if (E && t->avx) {
@@ -330,7 +336,7 @@ void rounding_solve_start(aqs_linkage *L)
 {
     solve_state *s = &L->s;
     tree *t = &L->t;
-    s->rc_sq = s->rc_max = s->rk_max = s->rf_sq = 0.0;
+    s->rc_sq = s->rc_max = s->rk_max = s->rf_max = 0.0;
     s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
@@ -346,6 +352,9 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
     const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K], il = inv_length(L);
+    /* a free joint's error as |(dw, dv / l)| (the world measures, its one
+     * reader): its linear components weighed by 1/l */
+    const int fj = d == 6 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE;
     double sq = 0.0, qe = 0.0, xns[AQS_JE_MAXH];
     int32_t h, i;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
@@ -374,6 +383,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                     sq6 = _mm_add_sd(_mm_add_sd(sq6, p45), _mm_unpackhi_pd(p45, p45));
                     a[i] += _mm_cvtsd_f64(sa);
                     q[i] = _mm_cvtsd_f64(sq6);
+                    if (fj && i >= 3) q[i] *= il;
                     qq += q[i] * q[i];
                 }
             }
@@ -384,11 +394,14 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                              p4 = qr[4] * xh[4], p5 = qr[5] * xh[5];
                 a[i] += fabs(p0) + fabs(p1) + fabs(p2) + fabs(p3) + fabs(p4) + fabs(p5);
                 q[i] = p0 + p1 + p2 + p3 + p4 + p5;
+                if (fj && i >= 3) q[i] *= il;
                 qq += q[i] * q[i];
             }
 #endif
             qe += w * sqrtn(qq);
         }
+        if (fj)
+            for (i = 3; i < 6; i++) a[i] *= il;
         for (i = 0; i < d; i++) sq += a[i] * a[i];
     }
     if (set) {
@@ -446,7 +459,7 @@ void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
         s->rc_sq += e * e;
         s->rc_max = maxd(s->rc_max, e);
     } else
-        s->rf_sq += e * e; /* a free joint: moves its bodies (world measures) */
+        s->rf_max = maxd(s->rf_max, e); /* a free joint (|(dw, dv / l)|): moves its bodies (world measures) */
 }
 
 void rounding_finish(aqs_linkage *L)
@@ -484,7 +497,7 @@ void rounding_finish(aqs_linkage *L)
          * carried to the bodies along their paths (worldbound_rounding);
          * rel_world divides by the reached bodies' accelerations less their
          * own estimated errors (docs/math.md §10b, "Rounding") */
-        const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq + s->rf_sq)) : INFINITY;
+        const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq), s->rf_max) : INFINITY;
         if (s->metric == AQS_METRIC_ABS_WORLD) tot = T + wr;
         else {
             /* the numerator of error_bound: min(sum E_n, top + sum E_h) */
