@@ -478,11 +478,14 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
             al[k] -= ale[k];
             lin[k] -= line[k];
         }
-        /* rounding: the DCA's relative accuracy times the terms' scale (m
-         * in 1/s^2: angular terms, and linear ones over l), at the lever
-         * arm of the whole linkage for the angular part and l for the
-         * linear one (the former (1 + R0) with 1 m read as l) */
-        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (l + R0);
+        /* rounding: the DCA's relative accuracy (1e-12) times the terms'
+         * scale m (in 1/s^2: the angular terms, and the linear ones over l)
+         * times (l + 2 R0): at least the first-order propagation 1e-12
+         * (m_lin + 2 R0 m_ang) (the angular error at the lever arm R0, and
+         * again through D_lin(c_0) = lin + al x (c_0 - handle)), and at
+         * least the former 1e-12 (m_ang + m_lin)(1 + R0) where l = 1 m
+         * (docs/math.md §10b, "The unit of length") */
+        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (l + 2.0 * R0);
         if (v > best) best = v;
     }
     return best;
