@@ -264,15 +264,12 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums;
      * a free joint's rho [dw; dv] as |(dw, dv / l)| (n6m: the world
      * measures, its one reader, docs/math.md §10b) */
-    {
-        const int fj = d == 6 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE;
-        for (i = 0; i < d; i++) {
-            double a = 0.0;
-            for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
-            for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
-            if (fj && i >= 3) a *= il;
-            srho += a * a;
-        }
+    for (i = 0; i < d; i++) {
+        double a = 0.0;
+        for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
+        for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
+        if (i >= 3 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE) a *= il; /* only d = 6 gets here */
+        srho += a * a;
     }
 #ifdef RND_AVX
     if (E && t->avx) {
@@ -352,9 +349,6 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
     const int32_t d = C->d, rows = 6 * C->nh;
     const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K], il = inv_length(L);
-    /* a free joint's error as |(dw, dv / l)| (the world measures, its one
-     * reader): its linear components weighed by 1/l */
-    const int fj = d == 6 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE;
     double sq = 0.0, qe = 0.0, xns[AQS_JE_MAXH];
     int32_t h, i;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
@@ -383,7 +377,6 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                     sq6 = _mm_add_sd(_mm_add_sd(sq6, p45), _mm_unpackhi_pd(p45, p45));
                     a[i] += _mm_cvtsd_f64(sa);
                     q[i] = _mm_cvtsd_f64(sq6);
-                    if (fj && i >= 3) q[i] *= il;
                     qq += q[i] * q[i];
                 }
             }
@@ -394,14 +387,11 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                              p4 = qr[4] * xh[4], p5 = qr[5] * xh[5];
                 a[i] += fabs(p0) + fabs(p1) + fabs(p2) + fabs(p3) + fabs(p4) + fabs(p5);
                 q[i] = p0 + p1 + p2 + p3 + p4 + p5;
-                if (fj && i >= 3) q[i] *= il;
                 qq += q[i] * q[i];
             }
 #endif
             qe += w * sqrtn(qq);
         }
-        if (fj)
-            for (i = 3; i < 6; i++) a[i] *= il;
         for (i = 0; i < d; i++) sq += a[i] * a[i];
     }
     if (set) {
@@ -450,6 +440,42 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
 }
 
+/* A free joint's estimated error as |(dw, dv / l)| (the world measures'
+ * e_free, docs/math.md §10b): joint_error's sums with the linear rows
+ * divided by l (its RND_RHO is so weighted already, rounding_node). */
+static double free_joint_error(const aqs_linkage *L, int32_t n)
+{
+    const tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const double *x = t->data + nd_xf(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
+    const int32_t rows = 6 * C->nh;
+    const double ku = RND_SAFETY * RND_U * RN(t, C)[RND_K], il = inv_length(L);
+    double a[6] = {0, 0, 0, 0, 0, 0}, sq = 0.0, qe = 0.0;
+    int32_t h, i, k;
+    for (h = 0; h < C->nh; h++) {
+        const double *xh = x + 6 * h;
+        const double xn = n6f(xh, il), w = xn > 0.0 ? ex[h] / xn : 0.0;
+        double qq = 0.0;
+        for (i = 0; i < 6; i++) {
+            const double *qr = QX + (int64_t)i * rows + 6 * h;
+            double q = 0.0;
+            for (k = 0; k < 6; k++) {
+                const double p = qr[k] * xh[k];
+                a[i] += fabs(p);
+                q += p;
+            }
+            if (i >= 3) q *= il;
+            qq += q * q;
+        }
+        qe += w * sqrtn(qq);
+    }
+    for (i = 0; i < 6; i++) {
+        const double v = i >= 3 ? a[i] * il : a[i];
+        sq += v * v;
+    }
+    return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
+}
+
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
 {
     solve_state *s = &L->s;
@@ -459,7 +485,7 @@ void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
         s->rc_sq += e * e;
         s->rc_max = maxd(s->rc_max, e);
     } else
-        s->rf_max = maxd(s->rf_max, e); /* a free joint (|(dw, dv / l)|): moves its bodies (world measures) */
+        s->rf_max = maxd(s->rf_max, free_joint_error(L, n)); /* a free joint: moves its bodies (world measures) */
 }
 
 void rounding_finish(aqs_linkage *L)

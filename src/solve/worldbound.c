@@ -311,10 +311,16 @@ static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6], double *
         if (t->rnd_x) ef += (1.0 + sqrt(vec3_dot(P[h].p, P[h].p)) * il) * t->rnd_x[nd->handles + h];
     }
     dense_matvec(Ii, f, a, 6, 6);
-    for (i = 0; i < 36; i++) {
-        /* row i / 6 (angular: 1, linear: 1/l), column i % 6 (torque: l, force: 1) */
-        const double v = Ii[i] * (i / 6 < 3 ? (i % 6 < 3 ? l : 1.0) : (i % 6 < 3 ? 1.0 : il));
-        ni += v * v;
+    { /* the blocks: angular rows (1) by torque columns (l), the off-diagonal ones (1), linear rows (1/l) by force columns (1) */
+        double saa = 0.0, sx = 0.0, sll = 0.0;
+        for (h = 0; h < 3; h++)
+            for (i = 0; i < 3; i++) {
+                const double aa = Ii[6 * h + i], al = Ii[6 * h + 3 + i], la = Ii[6 * (h + 3) + i], ll = Ii[6 * (h + 3) + 3 + i];
+                saa += aa * aa;
+                sx += al * al + la * la;
+                sll += ll * ll;
+            }
+        ni = l * l * saa + sx + il * il * sll;
     }
     *err = t->rnd_x ? sqrt(ni) * (ef + RND_SAFETY * RND_U * 16.0 * mag) : INFINITY;
 }
