@@ -443,6 +443,9 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
 /* A free joint's estimated error as |(dw, dv / l)| (the world measures'
  * e_free, docs/math.md §10b): joint_error's sums with the linear rows
  * divided by l (its RND_RHO is so weighted already, rounding_node). */
+#if defined(__GNUC__)
+__attribute__((noinline)) /* rare: kept out of rounding_backsub, called per node */
+#endif
 static double free_joint_error(const aqs_linkage *L, int32_t n)
 {
     const tree *t = &L->t;
