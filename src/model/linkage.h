@@ -216,7 +216,8 @@ typedef struct {
     double comp_sq;         /* sum of ||qdd_j||^2 over the computed joints */
     /* Rounding estimate of the last solve (src/solve/rounding.c) */
     double rc_sq, rc_max;   /* sum of squares / largest estimated error of the computed joints */
-    double rf_sq;           /* the same sum over the computed free joints (the world measures) */
+    double rf_max;          /* the largest estimated error of the computed free joints, as
+                               |(dw, dv / l)| (the world measures, src/solve/worldbound.c) */
     double rk_max;          /* largest relative error level met (units of u) */
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */

@@ -261,11 +261,14 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
         nt[2] = n6m(w, il);
         kb = maxd(kb, carry(maxd(wlevel(lv, nt, 3), kappa), ratio(maxd(maxd(nt[0], nt[1]), nt[2]), n6m(bch, il))));
     }
-    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums */
+    /* rho = -U beta + G2 Q, gamma = E^T (E beta) + U^T Q: entrywise sums;
+     * a free joint's rho [dw; dv] as |(dw, dv / l)| (n6m: the world
+     * measures, its one reader, docs/math.md §10b) */
     for (i = 0; i < d; i++) {
         double a = 0.0;
         for (j = 0; j < 6; j++) a += fabs(U[6 * i + j] * beta[j]);
         for (j = 0; j < d; j++) a += fabs(G2[d * i + j] * Q[j]);
+        if (i >= 3 && L->joints[L->m.eff_joint[C->joint]].type == AQS_JOINT_FREE) a *= il; /* only d = 6 gets here */
         srho += a * a;
     }
 #ifdef RND_AVX
@@ -330,7 +333,7 @@ void rounding_solve_start(aqs_linkage *L)
 {
     solve_state *s = &L->s;
     tree *t = &L->t;
-    s->rc_sq = s->rc_max = s->rk_max = s->rf_sq = 0.0;
+    s->rc_sq = s->rc_max = s->rk_max = s->rf_max = 0.0;
     s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
@@ -437,6 +440,45 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
     return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
 }
 
+/* A free joint's estimated error as |(dw, dv / l)| (the world measures'
+ * e_free, docs/math.md §10b): joint_error's sums with the linear rows
+ * divided by l (its RND_RHO is so weighted already, rounding_node). */
+#if defined(__GNUC__)
+__attribute__((noinline)) /* rare: kept out of rounding_backsub, called per node */
+#endif
+static double free_joint_error(const aqs_linkage *L, int32_t n)
+{
+    const tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const double *x = t->data + nd_xf(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
+    const int32_t rows = 6 * C->nh;
+    const double ku = RND_SAFETY * RND_U * RN(t, C)[RND_K], il = inv_length(L);
+    double a[6] = {0, 0, 0, 0, 0, 0}, sq = 0.0, qe = 0.0;
+    int32_t h, i, k;
+    for (h = 0; h < C->nh; h++) {
+        const double *xh = x + 6 * h;
+        const double xn = n6f(xh, il), w = xn > 0.0 ? ex[h] / xn : 0.0;
+        double qq = 0.0;
+        for (i = 0; i < 6; i++) {
+            const double *qr = QX + (int64_t)i * rows + 6 * h;
+            double q = 0.0;
+            for (k = 0; k < 6; k++) {
+                const double p = qr[k] * xh[k];
+                a[i] += fabs(p);
+                q += p;
+            }
+            if (i >= 3) q *= il;
+            qq += q * q;
+        }
+        qe += w * sqrtn(qq);
+    }
+    for (i = 0; i < 6; i++) {
+        const double v = i >= 3 ? a[i] * il : a[i];
+        sq += v * v;
+    }
+    return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
+}
+
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
 {
     solve_state *s = &L->s;
@@ -446,7 +488,7 @@ void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
         s->rc_sq += e * e;
         s->rc_max = maxd(s->rc_max, e);
     } else
-        s->rf_sq += e * e; /* a free joint: moves its bodies (world measures) */
+        s->rf_max = maxd(s->rf_max, free_joint_error(L, n)); /* a free joint: moves its bodies (world measures) */
 }
 
 void rounding_finish(aqs_linkage *L)
@@ -484,7 +526,7 @@ void rounding_finish(aqs_linkage *L)
          * carried to the bodies along their paths (worldbound_rounding);
          * rel_world divides by the reached bodies' accelerations less their
          * own estimated errors (docs/math.md §10b, "Rounding") */
-        const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq + s->rf_sq)) : INFINITY;
+        const double wr = L->wb ? worldbound_rounding(L, sqrt(s->rc_sq + ru_sq), s->rf_max) : INFINITY;
         if (s->metric == AQS_METRIC_ABS_WORLD) tot = T + wr;
         else {
             /* the numerator of error_bound: min(sum E_n, top + sum E_h) */

@@ -109,8 +109,9 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
 }
 
 /* pl_all, pa_all: the largest sums of sigma_lin^2, sigma_ang^2 over the
- * non-fixed joints (free ones included) on one composite's path to the
- * world, in body order (parents first): the lever sums of the rounding
+ * non-fixed joints on one composite's path to the world, free ones left
+ * out (at most one per path, its first: worldbound_rounding adds it
+ * apart), in body order (parents first): the lever sums of the rounding
  * estimate (worldbound_rounding). */
 static aqs_status all_paths(aqs_linkage *L, const char *fn)
 {
@@ -133,6 +134,10 @@ static aqs_status all_paths(aqs_linkage *L, const char *fn)
         jd = &L->joints[m->eff_joint[e]];
         c = m->eff_child[e];
         p = m->eff_parent[e];
+        if (jd->type == AQS_JOINT_FREE) { /* its parent is the world */
+            pl[c] = pa[c] = 0.0;
+            continue;
+        }
         d = joint_nv(jd->type);
         joint_subspace(jd, L->q + jd->qoff, S);
         pl[c] = pl[p] + sigma_rows(S, d, 3) * sigma_rows(S, d, 3);
@@ -265,35 +270,58 @@ void worldbound_begin(aqs_linkage *L)
     w->lower = w->lower_r = 0.0;
 }
 
-static double n6(const double *v)
+/* The linkage's length scale l (model.length, docs/math.md §10a "The unit
+ * of length"): the rounding terms below weigh the angular and linear parts
+ * of spatial vectors by it, as rounding.c does, so that each scales by one
+ * factor under a change of the unit of length (docs/math.md §10b, "The unit
+ * of length"). */
+static double length_of(const aqs_linkage *L) { return L->m.length > 0.0 ? L->m.length : 1.0; }
+/* A force [n; f] as |(n/l, f)| (il = 1/l; N), as rounding.c's n6f. */
+static double n6f(const double *v, double il)
 {
-    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    const double x = v[0] * il, y = v[1] * il, z = v[2] * il;
+    return sqrt(x * x + y * y + z * z + v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
 }
 
 /* Composite c's exact spatial acceleration minus g (its frame) from its
  * leaf's handle forces: Newton's law, as dca.c's comp_acceleration. *err:
- * the estimated error (2-norm) of a from the handle forces' estimated errors
- * (tree.rnd_x, carried by X_h^T: |X_h^T v| <= (1 + |p_h|) |v|) and the
- * products' rounding; the inverse inertia is data, as for the leaf
- * coefficients (docs/math.md §10a). +inf without the estimate's storage. */
+ * the estimated error of a = [alpha; a_lin] as |(alpha, a_lin / l)| (so
+ * |delta alpha| <= err, |delta a_lin| <= l err), from the handle forces'
+ * estimated errors (tree.rnd_x, as |(n/l, f)|: rounding.c's n6f), carried
+ * by X_h^T (|X_h^T v| <= (1 + |p_h| / l) |v| in that norm) and the
+ * products' rounding, through the inverse inertia in the same norms (the
+ * Frobenius norm of diag(1, 1/l) I^-1 diag(l, 1): every entry in
+ * 1/(kg m)); the inverse inertia is data, as for the leaf coefficients
+ * (docs/math.md §10a). +inf without the estimate's storage. */
 static void comp_accel(const aqs_linkage *L, int32_t leaf, double a[6], double *err)
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[leaf];
     const pose *P = t->poses + nd->poses;
     const double *x = t->data + nd_xf(nd), *Ii = L->m.comp_inverse + 36 * nd->comp;
+    const double l = length_of(L), il = 1.0 / l;
     double f[6], tmp[6], ef = 0.0, mag, ni = 0.0;
     int32_t h, i;
     memcpy(f, L->m.comp_force + 6 * nd->comp, sizeof f);
-    mag = n6(f);
+    mag = n6f(f, il);
     for (h = 0; h < nd->nh; h++) {
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
         for (i = 0; i < 6; i++) f[i] += tmp[i];
-        mag += n6(tmp);
-        if (t->rnd_x) ef += (1.0 + sqrt(vec3_dot(P[h].p, P[h].p))) * t->rnd_x[nd->handles + h];
+        mag += n6f(tmp, il);
+        if (t->rnd_x) ef += (1.0 + sqrt(vec3_dot(P[h].p, P[h].p)) * il) * t->rnd_x[nd->handles + h];
     }
     dense_matvec(Ii, f, a, 6, 6);
-    for (i = 0; i < 36; i++) ni += Ii[i] * Ii[i];
+    { /* the blocks: angular rows (1) by torque columns (l), the off-diagonal ones (1), linear rows (1/l) by force columns (1) */
+        double saa = 0.0, sx = 0.0, sll = 0.0;
+        for (h = 0; h < 3; h++)
+            for (i = 0; i < 3; i++) {
+                const double aa = Ii[6 * h + i], al = Ii[6 * h + 3 + i], la = Ii[6 * (h + 3) + i], ll = Ii[6 * (h + 3) + 3 + i];
+                saa += aa * aa;
+                sx += al * al + la * la;
+                sll += ll * ll;
+            }
+        ni = l * l * saa + sx + il * il * sll;
+    }
     *err = t->rnd_x ? sqrt(ni) * (ef + RND_SAFETY * RND_U * 16.0 * mag) : INFINITY;
 }
 
@@ -305,6 +333,7 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
     struct worldbound *w = L->wb;
     const model *m = &L->m;
     int32_t c = L->t.nodes[leaf].comp, k;
+    const double l = length_of(L);
     double a[6], g[3], ea;
     if (c == m->ncomp) return;
     comp_accel(L, leaf, a, &ea);
@@ -326,8 +355,8 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
         e = sqrt(vec3_dot(al, al)) + w->ell[b] * sqrt(vec3_dot(a, a));
         e *= 1.0 - 1e-12; /* the rounding of these few operations */
         if (e > w->lower) w->lower = e;
-        /* |delta a_lin + delta alpha x r| + ell |delta alpha| <= |delta a| (1 + |r| + ell) */
-        e -= ea * (1.0 + sqrt(vec3_dot(r, r)) + w->ell[b]);
+        /* |delta a_lin + delta alpha x r| + ell |delta alpha| <= ea (l + |r| + ell) */
+        e -= ea * (l + sqrt(vec3_dot(r, r)) + w->ell[b]);
         if (e > w->lower_r) w->lower_r = e;
     }
 }
@@ -350,9 +379,10 @@ void worldbound_processed(aqs_linkage *L, int32_t n)
  * motion at every handle and cancels from the relative accelerations
  * (square-root form: Lambda_i (Lambda^T x) + b_i; the inverse-inertia form
  * keeps it: Phi_i x + b_i). mag: a sum of absolute values of the terms (a
- * scale for the rounding). lw, lwa: Lambda^T x and |Lambda|^T |x|. */
+ * scale for the rounding), the linear rows' divided by l (il = 1/l: all in
+ * 1/s^2, as rounding.c's n6m). lw, lwa: Lambda^T x and |Lambda|^T |x|. */
 static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const double *lwa, int32_t i,
-                       double out[6], double *mag)
+                       double il, double out[6], double *mag)
 {
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
@@ -377,7 +407,7 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
             }
         }
         out[r] = s;
-        *mag += m;
+        *mag += r < 3 ? m : m * il;
     }
 }
 
@@ -417,6 +447,7 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     const double *s0 = w->sph + 4 * t->root, *x = t->data + nd_xf(nd);
     const int32_t rows = 6 * nd->nh;
     double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH];
+    const double l = length_of(L), il = 1.0 / l;
     double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
     int32_t i, k, r, entry = -1;
     if (nd->nh > AQS_WB_MAXH) return -1.0;
@@ -437,25 +468,30 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
         }
     }
     if (entry >= 0) {
-        handle_acc(L, n, lw, lwa, entry, ae, &mag);
+        handle_acc(L, n, lw, lwa, entry, il, ae, &mag);
         handle_world(L, n, ae, entry, s0, ale, line);
     } else { /* the world: -g everywhere (root trick), no rotation */
         ale[0] = ale[1] = ale[2] = 0.0;
         for (k = 0; k < 3; k++) line[k] = -L->gravity[k];
-        mag += sqrt(vec3_dot(line, line));
+        mag += sqrt(vec3_dot(line, line)) * il;
     }
     for (i = 0; i < nd->nh; i++) {
         double ah[6], al[3], lin[3], m = mag, v;
         if (i == entry) continue;
-        handle_acc(L, n, lw, lwa, i, ah, &m);
+        handle_acc(L, n, lw, lwa, i, il, ah, &m);
         handle_world(L, n, ah, i, s0, al, lin);
         for (k = 0; k < 3; k++) {
             al[k] -= ale[k];
             lin[k] -= line[k];
         }
-        /* rounding: the DCA's relative accuracy times the terms' scale, at
-         * the lever arm of the whole linkage for the angular part */
-        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (1.0 + R0);
+        /* rounding: the DCA's relative accuracy (1e-12) times the terms'
+         * scale m (in 1/s^2: the angular terms, and the linear ones over l)
+         * times (l + 2 R0): at least the first-order propagation 1e-12
+         * (m_lin + 2 R0 m_ang) (the angular error at the lever arm R0, and
+         * again through D_lin(c_0) = lin + al x (c_0 - handle)), and at
+         * least the former 1e-12 (m_ang + m_lin)(1 + R0) where l = 1 m
+         * (docs/math.md §10b, "The unit of length") */
+        v = sqrt(vec3_dot(lin, lin)) + sqrt(vec3_dot(al, al)) * R0 + 1e-12 * m * (l + 2.0 * R0);
         if (v > best) best = v;
     }
     return best;
@@ -490,14 +526,16 @@ double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond)
     return e * (1.0 + 1e-12);
 }
 
-double worldbound_rounding(const aqs_linkage *L, double r2)
+double worldbound_rounding(const aqs_linkage *L, double r2, double rfree)
 {
     /* Body b's part: sum over the joints j on its path of e_j (sigma_lin_j +
      * sigma_ang_j (|p_b - o_j| + ell_b)), and p_b, o_j lie in the root's
      * sphere; Cauchy-Schwarz on the path, Minkowski, and the path's e_j^2
-     * summed at most to r2^2 (docs/math.md §10b, "Rounding"). */
+     * summed at most to r2^2 (docs/math.md §10b, "Rounding"). A free joint
+     * is at most one per path (the first): its error rfree is |(delta
+     * alpha, delta a / l)|, so it adds at most rfree (l + lever). */
     const struct worldbound *w = L->wb;
     const double *s0 = w->sph + 4 * L->t.root;
     const double lever = 2.0 * (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[L->t.root];
-    return r2 * (sqrt(w->pl_all) + lever * sqrt(w->pa_all)) * (1.0 + 1e-12);
+    return (r2 * (sqrt(w->pl_all) + lever * sqrt(w->pa_all)) + rfree * (length_of(L) + lever)) * (1.0 + 1e-12);
 }

@@ -28,7 +28,7 @@ struct worldbound {
     double lower_r;       /* the same less each reached body's estimated rounding (the
                              rounding estimate's denominator, docs/math.md §10b) */
     double pl_all, pa_all; /* the largest sum of sigma_lin^2 (sigma_ang^2) over the non-fixed
-                             joints, free ones included, on one body's path to the world */
+                             joints, free ones left out, on one body's path to the world */
 };
 
 /* Whether the linkage's metric is a world one (and the data exist). */
@@ -53,8 +53,10 @@ void worldbound_processed(aqs_linkage *L, int32_t n);
 double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond);
 
 /* What the DCA's rounding adds to abs_world, from r2, the 2-norm of the
- * estimated errors of every joint's acceleration (computed, free and
- * uncomputed ones): r2 (sqrt(pl_all) + (2 R_0 + ellmax) sqrt(pa_all)). */
-double worldbound_rounding(const aqs_linkage *L, double r2);
+ * estimated errors of every non-free joint's acceleration (computed and
+ * uncomputed ones), and rfree, the largest free joint's as |(dw, dv / l)|:
+ * r2 (sqrt(pl_all) + lever sqrt(pa_all)) + rfree (l + lever), lever =
+ * 2 R_0 + ellmax, l the linkage's length scale. */
+double worldbound_rounding(const aqs_linkage *L, double r2, double rfree);
 
 #endif
