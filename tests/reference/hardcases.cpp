@@ -304,9 +304,8 @@ const double kAxisOblique[3] = {0.0, 0.70710678118654752, 0.70710678118654752};
 // uniform in (-pi, pi)), "nearsing" (q uniform in (-1e-8, 1e-8)); load: "g" gravity
 // (0,-9.81,0), "tip" 1 N along y at the tip, "g+tip"; "oblique": straight, the axes all
 // (0, 1, 1)/sqrt 2 instead of z (family "oblique": the chain still planar, but no component
-// of its frames is an exact zero, and gravity half out of its plane: a cantilever whose
-// out-of-plane bending moment, m g n^2 / (2 sqrt 2) at the base, the joints' torques are
-// projected out of; ill-conditioned, see kTolAba).
+// of its frames is an exact zero, and gravity half out of its plane; the solvers lose digits
+// in these frames, not the problem: see tol_aba below and docs/math.md §13a).
 void build_chain(Case &c, int n, const std::string &shape, const std::string &load,
                  uint64_t seed) {
     Builder B(c);
@@ -1015,9 +1014,9 @@ int main(int argc, char **argv) {
         for (const FamilyTol &f : kTolAba)
             if (sp.family == f.family) tol_aba = f.aba;
         if (sp.delta > 0) tol_aba = std::max(tol_aba, kNearEqAba / sp.delta);
-        // The oblique chain is ill-conditioned (its joint torques are small projections of large
-        // out-of-plane moments): the long-double solve's distance to the quad one, ld_vs_q,
-        // is cond x u_ld, so a double solver's error is up to cond x u = 2048 x ld_vs_q
+        // The oblique chain's frames cost the ABA digits (D = S^T I^A S, S oblique, an O(1)
+        // combination of n^3-sized entries; docs/math.md §13a): the long-double ABA's distance to
+        // the quad one, ld_vs_q, is that loss x u_ld, so the double ABA's is about 2048 x ld_vs_q
         // (measured ABA / ld_vs_q: 4,500, 2,200, 3,200 at 100, 1,000, 2,000 links): allowed 1e4 x ld_vs_q.
         if (sp.family == "oblique" && std::isfinite(ld_vs_q)) tol_aba = std::max(tol_aba, 1e4 * ld_vs_q);
 
