@@ -1498,17 +1498,6 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     return 0;
 }
 
-/* Node n's composite inertia, Lambda and Phi from its children's, for the
- * principal joint's subspace S (6 x d), and the joint's coefficients from the
- * same reduction: with L_k the rows of the relative acceleration across k
- * (T = L_k L_k^T), reflected into [K1 K2] while Tc^T L_k becomes [Lc 0]:
- * E = Lc^-1 Tc^T (W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T), U = Sd^T (1 - K1 E),
- * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
- * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
- * composite inertia is not positive definite or the joint cannot take a
- * constraint force (Lc singular); 1, having written nothing but the composite
- * inertia, when both sides are rigid and rigid_join_wanted: the caller then
- * takes rigid_join (called from there, so that it is not inlined here). */
 /* Row q of the rows x ncol matrix M has a zero at its pivot column p: the
  * column in (p, end) where row q's entry is largest swapped into p (every
  * row), so the reflection's vector stays within row q's non-zeros and rows
@@ -1531,6 +1520,17 @@ static void pivot_column(double *M, int32_t ncol, int32_t q, int32_t rows, int32
     }
 }
 
+/* Node n's composite inertia, Lambda and Phi from its children's, for the
+ * principal joint's subspace S (6 x d), and the joint's coefficients from the
+ * same reduction: with L_k the rows of the relative acceleration across k
+ * (T = L_k L_k^T), reflected into [K1 K2] while Tc^T L_k becomes [Lc 0]:
+ * E = Lc^-1 Tc^T (W = E^T E = Tc (Tc^T T Tc)^-1 Tc^T), U = Sd^T (1 - K1 E),
+ * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
+ * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
+ * composite inertia is not positive definite or the joint cannot take a
+ * constraint force (Lc singular); 1, having written nothing but the composite
+ * inertia, when both sides are rigid and rigid_join_wanted: the caller then
+ * takes rigid_join (called from there, so that it is not inlined here). */
 static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
                       const double *Q)
 {
