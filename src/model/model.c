@@ -181,8 +181,10 @@ static void comp_inverse(const aqs_linkage *L, int32_t c, double out[36])
 {
     const model *m = &L->m;
     double I[36];
-    if (m->comp_inertia) memcpy(I, m->comp_inertia + 36 * (size_t)c, sizeof I);
-    else kin_comp_inertia(L, c, I);
+    /* from the solver's copy whenever it exists, so that every inverse has
+     * the same bits (the copy is kept in the aligned frames) */
+    if (L->aba.joint) kin_comp_inertia(L, c, I);
+    else memcpy(I, m->comp_inertia + 36 * (size_t)c, sizeof I);
     (void)dense_spd_inverse(I, out, 6); /* checked at finalize */
 }
 

@@ -43,19 +43,6 @@
 #define ABA_INLINE static
 #endif
 
-static void pack_inertia(const double *F, double *P)
-{
-    int i, j, n = 0;
-    for (i = 0; i < 3; i++)
-        for (j = i; j < 3; j++) {
-            P[KIN_PA + n] = F[6 * i + j];
-            P[KIN_PC + n] = F[6 * (3 + i) + 3 + j];
-            n++;
-        }
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) P[KIN_PB + 3 * i + j] = F[6 * i + 3 + j];
-}
-
 /* Build the ABA order (depth first from the world, children by effective
  * index) and the per-joint constants. */
 aqs_status aba_alloc(aqs_linkage *L)
@@ -97,11 +84,12 @@ aqs_status aba_alloc(aqs_linkage *L)
             aba_joint *jt = &a->joint[n];
             const joint_def *jd = &L->joints[m->eff_joint[e]];
             int32_t p = m->eff_parent[e];
-            jt->place = m->eff_place[e];
+            double Cp[9];
             memcpy(jt->axis, jd->axis, sizeof jt->axis);
-            pack_inertia(m->comp_inertia + 36 * (size_t)c, jt->I);
             jt->parent = p == m->ncomp ? -1 : a->pos_of_comp[p]; /* p came first */
             jt->type = jd->type;
+            kin_align_place(jt, jt->parent >= 0 && kin_align(&a->joint[jt->parent], Cp) ? Cp : NULL,
+                            &m->eff_place[e], m->comp_inertia + 36 * (size_t)c);
             jt->qoff = jd->qoff;
             jt->voff = jd->voff;
             jt->joint = m->eff_joint[e];
@@ -405,7 +393,7 @@ static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node
             for (j = 0; j < d; j++) v -= U[6 * j + r] * DU[6 * j + i];
             F[6 * r + i] = F[6 * i + r] = v;
         }
-    pack_inertia(F, Ia);
+    kin_pack_inertia(F, Ia);
     return AQS_OK;
 }
 
@@ -417,40 +405,35 @@ static aqs_status backward(aqs_linkage *L)
     aqs_status st;
     const int32_t ahead = prefetch_ahead(m->ne);
     for (i = 0; i < m->nloaded_comps; i++) { /* pA starts at minus the loads */
-        int32_t c = m->loaded_comps[i];
-        double *pA = a->node[a->pos_of_comp[c]].pA;
-        for (k = 0; k < 6; k++) pA[k] -= m->comp_force[6 * c + k];
+        int32_t c = m->loaded_comps[i], pos = a->pos_of_comp[c];
+        double *pA = a->node[pos].pA, f[6], C[9];
+        memcpy(f, m->comp_force + 6 * (size_t)c, sizeof f);
+        if (kin_align(&a->joint[pos], C)) kin_align_vec(C, f); /* into the aligned frame */
+        for (k = 0; k < 6; k++) pA[k] -= f[k];
     }
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
-        const double *IA = nd->IA, *pA = nd->pA, *x = jt->axis;
+        const double *IA = nd->IA, *pA = nd->pA;
         double Ia[21], pa[6], *U = nd->v.s.U;
         if (k >= ahead) prefetch_position(a, k - ABA_AHEAD, (int)offsetof(aba_joint, I));
         if (a->need[k]) a->need[k] = 0; /* X composed for the loads already */
         else kin_joint_pose(L, jt, &nd->X); /* composed once: the forward pass reads it */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
             double D, Dinv, u, w;
-            if (jt->type == AQS_JOINT_REVOLUTE) { /* S = [axis; 0]: U = [A x; B^T x] */
+            /* the aligned frame (kintree.h): the axis is z */
+            if (jt->type == AQS_JOINT_REVOLUTE) { /* S = [e_z; 0]: U = [A e_z; B^T e_z] */
                 const double *A = IA + KIN_PA, *B = IA + KIN_PB;
-                U[0] = A[0] * x[0] + A[1] * x[1] + A[2] * x[2];
-                U[1] = A[1] * x[0] + A[3] * x[1] + A[4] * x[2];
-                U[2] = A[2] * x[0] + A[4] * x[1] + A[5] * x[2];
-                U[3] = B[0] * x[0] + B[3] * x[1] + B[6] * x[2];
-                U[4] = B[1] * x[0] + B[4] * x[1] + B[7] * x[2];
-                U[5] = B[2] * x[0] + B[5] * x[1] + B[8] * x[2];
-                D = x[0] * U[0] + x[1] * U[1] + x[2] * U[2];
-                u = L->tau[jt->voff] - (x[0] * pA[0] + x[1] * pA[1] + x[2] * pA[2]);
-            } else { /* S = [0; axis]: U = [B x; C x] */
+                U[0] = A[2], U[1] = A[4], U[2] = A[5];
+                U[3] = B[6], U[4] = B[7], U[5] = B[8];
+                D = U[2];
+                u = L->tau[jt->voff] - pA[2];
+            } else { /* S = [0; e_z]: U = [B e_z; C e_z] */
                 const double *B = IA + KIN_PB, *C = IA + KIN_PC;
-                U[0] = B[0] * x[0] + B[1] * x[1] + B[2] * x[2];
-                U[1] = B[3] * x[0] + B[4] * x[1] + B[5] * x[2];
-                U[2] = B[6] * x[0] + B[7] * x[1] + B[8] * x[2];
-                U[3] = C[0] * x[0] + C[1] * x[1] + C[2] * x[2];
-                U[4] = C[1] * x[0] + C[3] * x[1] + C[4] * x[2];
-                U[5] = C[2] * x[0] + C[4] * x[1] + C[5] * x[2];
-                D = x[0] * U[3] + x[1] * U[4] + x[2] * U[5];
-                u = L->tau[jt->voff] - (x[0] * pA[3] + x[1] * pA[4] + x[2] * pA[5]);
+                U[0] = B[2], U[1] = B[5], U[2] = B[8];
+                U[3] = C[2], U[4] = C[4], U[5] = C[5];
+                D = U[5];
+                u = L->tau[jt->voff] - pA[5];
             }
             if (!(D > 0.0) || !isfinite(D)) return singular(L, jt);
             Dinv = 1.0 / D;
@@ -544,19 +527,20 @@ static void forward(aqs_linkage *L)
         if (k + ahead < m->ne) prefetch_position(a, k + ABA_AHEAD, (int)sizeof(aba_joint));
         motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
-            const double *U = nd->v.s.U, *x = jt->axis;
+            const double *U = nd->v.s.U;
             double qdd = (nd->u - (U[0] * ac[0] + U[1] * ac[1] + U[2] * ac[2] + U[3] * ac[3] + U[4] * ac[4] +
                                    U[5] * ac[5])) * nd->Dinv;
             L->qdd[jt->voff] = qdd;
-            i = jt->type == AQS_JOINT_REVOLUTE ? 0 : 3;
-            ac[i] += x[0] * qdd;
-            ac[i + 1] += x[1] * qdd;
-            ac[i + 2] += x[2] * qdd;
+            ac[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5] += qdd; /* S = e_z, aligned */
         } else {
             forward_general(L, jt, nd, ac);
         }
         kin_inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        {
+            double C[9];
+            if (kin_align(jt, C)) kin_unalign_vec(C, f); /* cforce: the composite's frame */
+        }
         memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
         memset(nd->pA, 0, sizeof nd->pA);
     }

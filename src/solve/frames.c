@@ -49,7 +49,7 @@ static void frames_leaf(aqs_linkage *L, int32_t n)
     for (i = 0; i < nd->nh; i++) {
         int32_t e = t->handles[nd->handles + i];
         if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
-        else P[i] = *kin_eff_place(L, e);                          /* holds e up: joint frame */
+        else kin_eff_place(L, e, &P[i]);                           /* holds e up: joint frame */
     }
 }
 

@@ -50,8 +50,7 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
         double *ac = nd->v.s.acc;
         spatial_xform_motion(&nd->X, ap, ac);
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
-            const int o = jt->type == AQS_JOINT_REVOLUTE ? 0 : 3;
-            for (i = 0; i < 3; i++) ac[o + i] += jt->axis[i] * qd[0];
+            ac[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5] += qd[0]; /* the aligned frame: S = e_z */
         } else {
             const int d = joint_nv(jt->type);
             joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
@@ -64,9 +63,11 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
         kin_inertia_mul(jt->I, ac, nd->v.s.U);
     }
     for (i = 0; i < (homog ? 0 : m->nloaded_comps); i++) { /* minus the loads (none on the world) */
-        const int32_t c = m->loaded_comps[i];
-        double *f = a->node[a->pos_of_comp[c]].v.s.U;
-        for (j = 0; j < 6; j++) f[j] -= m->comp_force[6 * c + j];
+        const int32_t c = m->loaded_comps[i], pos = a->pos_of_comp[c];
+        double *f = a->node[pos].v.s.U, fc[6], C[9];
+        memcpy(fc, m->comp_force + 6 * (size_t)c, sizeof fc);
+        if (kin_align(&a->joint[pos], C)) kin_align_vec(C, fc); /* into the aligned frame */
+        for (j = 0; j < 6; j++) f[j] -= fc[j];
     }
     for (k = m->ne - 1; k >= 0; k--) { /* inward: children's forces are in */
         const aba_joint *jt = &a->joint[k];
@@ -74,8 +75,7 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
         const double *f = nd->v.s.U, *Q = L->tau + jt->voff;
         double *rk = r + jt->voff;
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
-            const double *x = jt->axis, *fo = f + (jt->type == AQS_JOINT_REVOLUTE ? 0 : 3);
-            const double s = x[0] * fo[0] + x[1] * fo[1] + x[2] * fo[2];
+            const double s = f[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5]; /* S^T f, S = e_z */
             rk[0] = homog ? s : Q[0] - s;
             sq += rk[0] * rk[0];
         } else {
@@ -111,6 +111,9 @@ void residual_forces(const aqs_linkage *L, double *cforce)
 {
     const aba_state *a = &L->aba;
     int32_t k;
-    for (k = 0; k < L->m.ne; k++)
-        memcpy(cforce + 6 * (size_t)a->joint[k].joint, a->node[k].v.s.U, 6 * sizeof(double));
+    for (k = 0; k < L->m.ne; k++) {
+        double *f = cforce + 6 * (size_t)a->joint[k].joint, C[9];
+        memcpy(f, a->node[k].v.s.U, 6 * sizeof(double));
+        if (kin_align(&a->joint[k], C)) kin_unalign_vec(C, f); /* the composite's frame */
+    }
 }
