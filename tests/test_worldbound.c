@@ -567,7 +567,8 @@ static void test_bound_scenes(void **state)
 static void node_world(aqs_linkage *L, int32_t n, pose *P)
 {
     while (L->t.nodes[n].joint >= 0) n = L->t.nodes[n].a;
-    frames_comp_world(L, L->t.nodes[n].comp, P);
+    if (L->t.nodes[n].comp == L->m.ncomp) *P = L->t.world_frame; /* the world leaf's frame (frames.h) */
+    else frames_comp_world(L, L->t.nodes[n].comp, P);
 }
 
 /* Every node's sphere (lazily updated over a trajectory) holds its bodies'

@@ -518,6 +518,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);
     }
+    frames_world_frame(L, &L->t.world_frame); /* the grounded nodes' frame (frames.h) */
     /* The tree's poses when collision needs them at once, or the leaves'
      * (welded bodies' forces after an exact solve); otherwise when a setter
      * first chooses the DCA or a tolerance (dca_enable) or a shape is added. */
@@ -1356,17 +1357,37 @@ AQS_API aqs_status aqs_joint_get_acceleration(const aqs_linkage *cL, int32_t joi
     return AQS_OK;
 }
 
+/* Joint j's constraint force as the user reads it: in its child body's frame.
+ * The solvers keep it in the child composite's aligned frame (joint.h,
+ * docs/math.md §13b), turned by C from the body's: out = C f, both halves. */
+static void constraint_force_out(const aqs_linkage *L, int32_t j, double out[6])
+{
+    const double *f = L->cforce + 6 * (size_t)j;
+    double C[9];
+    int h;
+    if (!joint_align_rotation(&L->joints[j], C)) {
+        memcpy(out, f, 6 * sizeof(double));
+        return;
+    }
+    for (h = 0; h < 6; h += 3) {
+        out[h] = C[0] * f[h] + C[1] * f[h + 1] + C[2] * f[h + 2];
+        out[h + 1] = C[3] * f[h] + C[4] * f[h + 1] + C[5] * f[h + 2];
+        out[h + 2] = C[6] * f[h] + C[7] * f[h + 1] + C[8] * f[h + 2];
+    }
+}
+
 AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *cL, double *f, size_t n)
 {
     static const char fn[] = "aqs_linkage_get_constraint_forces";
     aqs_linkage *L = (aqs_linkage *)cL;
     aqs_status st;
+    int32_t j;
     CHECK_LINKAGE(L);
     if ((st = need_solved(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, f);
     if (n < 6 * (size_t)L->njoints)
         return lk_fail(L, AQS_ESIZE, "%s: n = %zu but 6 * joints = %d", fn, n, 6 * (int)L->njoints);
-    memcpy(f, L->cforce, sizeof(double) * 6 * (size_t)L->njoints);
+    for (j = 0; j < L->njoints; j++) constraint_force_out(L, j, f + 6 * (size_t)j);
     return AQS_OK;
 }
 
@@ -1379,7 +1400,7 @@ AQS_API aqs_status aqs_joint_get_constraint_force(const aqs_linkage *cL, int32_t
     if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
     if ((st = need_solved(L, fn)) != AQS_OK) return st;
     CHECK_PTR(L, fn, f);
-    memcpy(f, L->cforce + 6 * (size_t)joint, 6 * sizeof(double));
+    constraint_force_out(L, joint, f);
     return AQS_OK;
 }
 

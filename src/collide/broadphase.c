@@ -4,6 +4,7 @@
  * is here too, as the reference the tree query must reproduce exactly. */
 #include "collide.h"
 #include "invariant.h"
+#include "kintree.h"
 
 #include <math.h>
 #include <string.h>
@@ -351,8 +352,18 @@ aqs_status broadphase_build(aqs_linkage *L, const char *fn)
     c->comp_start[0] = 0;
     for (i = 0; i < ns; i++) {
         const shape_def *s = &c->shapes[i];
-        if (s->body < 0) c->shape_in[i] = s->local;
-        else pose_compose(model_body_in_comp(m, s->body), &s->local, &c->shape_in[i]);
+        pose B, W;
+        if (s->body < 0) pose_identity(&B);
+        else kin_body_in_comp(L, s->body, &B);
+        pose_compose(&B, &s->local, &W);
+        if (comp_of_shape(L, s) == m->ncomp) {
+            /* fixed in the world: in the world leaf's frame (frames.h) */
+            pose Wi;
+            pose_inverse(&L->t.world_frame, &Wi);
+            pose_compose(&Wi, &W, &c->shape_in[i]);
+        } else {
+            c->shape_in[i] = W;
+        }
     }
     for (n = 0; n < nn; n++) {
         if (L->t.nodes[n].joint < 0) fit_leaf(L, c, n);
@@ -671,9 +682,7 @@ static void brute(query *q)
     aqs_linkage *L = q->L;
     collision *c = q->c;
     int32_t i, j, ns = c->nshapes;
-    pose I;
-    pose_identity(&I);
-    all_comp_world(L, c, L->t.root, &I);
+    all_comp_world(L, c, L->t.root, &L->t.world_frame); /* the root's frame (src/solve/frames.h) */
     for (i = 0; i < ns; i++) {
         narrow_place(&c->shapes[i], &c->comp_world[comp_of_shape(L, &c->shapes[i])],
                      &c->shape_in[i], &c->placed[i]);
@@ -728,7 +737,7 @@ static size_t run_query(aqs_linkage *L, int32_t mode, aqs_contact *out, size_t c
             c->qstamp = 1;
         }
         n = L->t.root;
-        pose_identity(&c->wpose[n]);
+        c->wpose[n] = L->t.world_frame; /* the root's frame (src/solve/frames.h) */
         world_centre(c->sph + 4 * n, &c->wpose[n], c->wcen + 3 * n);
         c->wstamp[n] = c->qstamp;
         self(&q, n);

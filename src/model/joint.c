@@ -60,6 +60,57 @@ int joint_check_position(int32_t type, const double *q, double *out)
     return 0;
 }
 
+int joint_align_rotation(const joint_def *j, double C[9])
+{
+    int i;
+    if (!joint_uses_axis(j->type)) return 0;
+    if (j->axis[2] == 1.0 && j->u[0] == 1.0 && j->v[1] == 1.0) return 0; /* unit vectors: the identity */
+    for (i = 0; i < 3; i++) {
+        C[3 * i] = j->u[i];
+        C[3 * i + 1] = j->v[i];
+        C[3 * i + 2] = j->axis[i];
+    }
+    return 1;
+}
+
+void joint_aligned(const joint_def *j, joint_def *out)
+{
+    int i;
+    *out = *j;
+    if (!joint_uses_axis(j->type)) return;
+    for (i = 0; i < 3; i++) {
+        out->axis[i] = i == 2 ? 1.0 : 0.0;
+        out->u[i] = i == 0 ? 1.0 : 0.0;
+        out->v[i] = i == 1 ? 1.0 : 0.0;
+    }
+}
+
+void joint_child_pose_aligned(const joint_def *j, const double *q, pose *P)
+{
+    joint_def a;
+    if (j->type == REVOLUTE) { /* a turn about z, as rot_axis_angle gives it */
+        const double c = cos(q[0]), s = sin(q[0]);
+        pose_identity(P);
+        P->R[0] = c, P->R[1] = -s, P->R[3] = s, P->R[4] = c;
+        return;
+    }
+    joint_aligned(j, &a);
+    joint_child_pose(&a, q, P);
+}
+
+void joint_subspace_aligned(const joint_def *j, const double *q, double *S)
+{
+    joint_def a;
+    if (j->type == REVOLUTE || j->type == PRISMATIC) { /* [e_z; 0] or [0; e_z] */
+        int i;
+        for (i = 0; i < 6; i++) S[i] = 0.0;
+        S[j->type == REVOLUTE ? 2 : 5] = 1.0;
+        return;
+    }
+    joint_aligned(j, &a);
+    joint_subspace(&a, q, S);
+}
+
 void joint_child_pose(const joint_def *j, const double *q, pose *P)
 {
     int i;

@@ -35,6 +35,21 @@ void joint_zero_position(int32_t type, double *q);
  * positive number, or -1 for a quaternion of wrong norm. */
 int joint_check_position(int32_t type, const double *q, double *out);
 
+/* The aligned frames (docs/math.md §13b). A joint that uses an axis
+ * (joint_uses_axis) is solved in its frames turned by C = [u v axis] (the
+ * columns; a rotation): its joint frame becomes joint frame C and its child
+ * composite's frame child frame C, where its axis is e_z and u, v are e_x,
+ * e_y. C into C (row-major); returns 0 (C unset) when the joint uses no axis
+ * or C is the identity. */
+int joint_align_rotation(const joint_def *j, double C[9]);
+/* The joint as the solvers see it in its aligned frames: j with axis, u, v
+ * replaced by e_z, e_x, e_y when it uses an axis. */
+void joint_aligned(const joint_def *j, joint_def *out);
+/* joint_child_pose and joint_subspace of joint_aligned(j): J(q) and S in the
+ * aligned frames, what every solver uses. */
+void joint_child_pose_aligned(const joint_def *j, const double *q, pose *P);
+void joint_subspace_aligned(const joint_def *j, const double *q, double *S);
+
 /* Pose of the child frame in the joint frame at position q. */
 void joint_child_pose(const joint_def *j, const double *q, pose *P);
 /* Motion subspace S (6 x nv, row-major) in the child frame at position q. */

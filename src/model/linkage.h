@@ -127,6 +127,10 @@ typedef struct {
                           node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
                           (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
                           error in the subtree */
+    pose world_frame; /* the world leaf's frame in the world: the (aligned) joint frame of its
+                         first handle (frames_world_frame, docs/math.md §13b), so that the
+                         grounded nodes, whose frame it is, share the plane of a planar
+                         linkage that the world holds; set at finalize */
     int poses_stale; /* the internal nodes' poses (and J) do not follow q: frames_poses
                         recomputes them when the DCA, the adaptive solver, collision or a
                         world-pose query needs them (src/model/stale.c decides) */
@@ -137,7 +141,7 @@ typedef struct {
 typedef struct {
     int32_t ncomp;          /* composites; index ncomp is the world */
     int32_t *comp_of_body;  /* nbodies */
-    pose *body_in_comp;     /* nbodies: body frame in its composite's frame; NULL after
+    pose *body_in_comp;     /* nbodies: body frame in its composite's (aligned) frame; NULL after
                                finalize when no body is welded (all identities): read it
                                with model_body_in_comp */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
@@ -170,13 +174,6 @@ typedef struct {
                                norms of spatial vectors, so that it does not depend on the
                                unit of length (src/solve/rounding.c) */
 } model;
-
-/* A body's frame in its composite's frame. */
-static inline const pose *model_body_in_comp(const model *m, int32_t body)
-{
-    static const pose identity = {{1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}, {0.0, 0.0, 0.0}};
-    return m->body_in_comp ? &m->body_in_comp[body] : &identity;
-}
 
 /* State of the last solve (adaptive back-substitution, MATH.md §6). */
 typedef struct {
@@ -239,7 +236,6 @@ typedef struct {
     int32_t qoff, voff;
     int32_t joint;    /* user joint index */
     int32_t comp;     /* the child composite */
-    double axis[3];   /* the joint's axis (revolute, prismatic) */
     pose place;       /* the joint frame in the parent composite's frame */
     double I[21];     /* the composite's spatial inertia, its frame, packed */
 } aba_joint;

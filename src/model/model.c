@@ -146,10 +146,12 @@ void model_comp_mass(const aqs_linkage *L, int32_t comp, double *mp)
         int32_t b = m->members[k];
         const body_def *bd = &L->bodies[b];
         double one[13];
+        pose B;
         one[0] = bd->mass;
         memcpy(one + 1, bd->com, 3 * sizeof(double));
         memcpy(one + 4, bd->inertia, 9 * sizeof(double));
-        model_mass_add_posed(mp, model_body_in_comp(m, b), one);
+        kin_body_in_comp(L, b, &B);
+        model_mass_add_posed(mp, &B, one);
     }
 }
 
@@ -169,6 +171,33 @@ static int rotational_inertia_definite(const double *mp)
     sym3_eigenvalues(mp + 4, ev);
     trace = mp[4] + mp[8] + mp[12];
     return isfinite(ev[0]) && ev[0] > 64 * DBL_EPSILON * trace;
+}
+
+/* Entries within 4 u of the exact zeros and ones of a joint frame whose z
+ * axis is its parent composite's (or its negative) are set to them: R's
+ * third row and column, and p's z when it is within 4 u |p|. Turning the
+ * frames by C leaves rounding of that size where two axes are parallel; left
+ * there it would couple the plane of a planar chain to its O(n^3)
+ * out-of-plane inertia at every joint (docs/math.md §13b). */
+static void snap_planar(pose *P)
+{
+    double *R = P->R, *p = P->p;
+    const double tol = 4.0 * DBL_EPSILON;
+    if (fabs(R[2]) > tol || fabs(R[5]) > tol || fabs(R[6]) > tol || fabs(R[7]) > tol || fabs(fabs(R[8]) - 1.0) > tol)
+        return;
+    R[2] = R[5] = R[6] = R[7] = 0.0;
+    R[8] = R[8] > 0.0 ? 1.0 : -1.0;
+    { /* and the plane's 2 x 2 block an exact turn (R[8] = 1) or reflection
+       * (R[8] = -1) to the rounding: C's own rounding (C^T C = I + O(u))
+       * would otherwise scale the plane by 1 + O(u) at every joint */
+        const double c = R[8] > 0.0 ? 0.5 * (R[0] + R[4]) : 0.5 * (R[0] - R[4]);
+        const double s = R[8] > 0.0 ? 0.5 * (R[3] - R[1]) : 0.5 * (R[1] + R[3]);
+        const double h = sqrt(c * c + s * s);
+        R[0] = c / h, R[3] = s / h;
+        R[1] = R[8] > 0.0 ? -R[3] : R[3];
+        R[4] = R[8] > 0.0 ? R[0] : -R[0];
+    }
+    if (fabs(p[2]) <= tol * sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])) p[2] = 0.0;
 }
 
 void model_body_inertia(const aqs_linkage *L, int32_t body, double I[36])
@@ -371,7 +400,7 @@ aqs_status model_build(aqs_linkage *L)
             m->nwelded++;
         } else {
             m->comp_of_body[b] = m->ncomp++;
-            pose_identity(&m->body_in_comp[b]);
+            kin_joint_turn(j, 1, &m->body_in_comp[b]); /* its pose in the aligned frame */
         }
     }
     for (i = 0; i < nb; i++)
@@ -405,13 +434,23 @@ aqs_status model_build(aqs_linkage *L)
         double Ib[36], Ic[36], one[13];
         const body_def *bd = &L->bodies[b];
         if (c == m->ncomp) continue;
+        double Cr[9];
         if (L->joints[m->parent_joint[b]].type != AQS_JOINT_FIXED) m->comp_root[c] = b;
-        model_body_inertia(L, b, Ib);
-        spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
-        for (i = 0; i < 36; i++) m->comp_inertia[36 * c + i] += Ic[i];
         one[0] = bd->mass;
         memcpy(one + 1, bd->com, 3 * sizeof(double));
         memcpy(one + 4, bd->inertia, 9 * sizeof(double));
+        if (joint_align_rotation(&L->joints[m->parent_joint[m->comp_root[c]]], Cr)) {
+            /* an aligned composite: the body's mass properties turned, then
+             * its spatial inertia, whose mass block stays m I exactly (C is
+             * orthogonal only to the rounding: C^T (m I) C is not m I) */
+            double mp[13] = {0};
+            model_mass_add_posed(mp, &m->body_in_comp[b], one);
+            spatial_inertia(mp[0], mp + 1, mp + 4, Ic);
+        } else {
+            model_body_inertia(L, b, Ib);
+            spatial_inertia_to_parent(&m->body_in_comp[b], Ib, Ic);
+        }
+        for (i = 0; i < 36; i++) m->comp_inertia[36 * c + i] += Ic[i];
         model_mass_add_posed(cmass + 13 * c, &m->body_in_comp[b], one);
     }
     for (i = 0; i < m->ncomp; i++) {
@@ -439,18 +478,21 @@ aqs_status model_build(aqs_linkage *L)
     for (i = 0; i < nj; i++) {
         const joint_def *j = &L->joints[i];
         int32_t e = m->eff_of_joint[i];
-        pose place;
+        pose place, P, Cj;
         if (e < 0) continue;
         m->eff_joint[e] = i;
         m->eff_child[e] = m->comp_of_body[j->child];
         pose_from_quat(j->pos, j->quat, &place);
         if (j->parent == AQS_WORLD) {
             m->eff_parent[e] = m->ncomp;
-            m->eff_place[e] = place;
+            P = place;
         } else {
             m->eff_parent[e] = m->comp_of_body[j->parent];
-            pose_compose(&m->body_in_comp[j->parent], &place, &m->eff_place[e]);
+            pose_compose(&m->body_in_comp[j->parent], &place, &P);
         }
+        kin_joint_turn(j, 0, &Cj); /* the aligned joint frame: joint frame C */
+        pose_compose(&P, &Cj, &m->eff_place[e]);
+        snap_planar(&m->eff_place[e]);
     }
     m->length = length_scale(m, cmass);
     /* Members of each composite, parents first (for the fixed joints' forces). */

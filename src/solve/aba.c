@@ -84,12 +84,10 @@ aqs_status aba_alloc(aqs_linkage *L)
             aba_joint *jt = &a->joint[n];
             const joint_def *jd = &L->joints[m->eff_joint[e]];
             int32_t p = m->eff_parent[e];
-            double Cp[9];
-            memcpy(jt->axis, jd->axis, sizeof jt->axis);
+            jt->place = m->eff_place[e]; /* the aligned frames, as the model keeps them */
+            kin_pack_inertia(m->comp_inertia + 36 * (size_t)c, jt->I);
             jt->parent = p == m->ncomp ? -1 : a->pos_of_comp[p]; /* p came first */
             jt->type = jd->type;
-            kin_align_place(jt, jt->parent >= 0 && kin_align(&a->joint[jt->parent], Cp) ? Cp : NULL,
-                            &m->eff_place[e], m->comp_inertia + 36 * (size_t)c);
             jt->qoff = jd->qoff;
             jt->voff = jd->voff;
             jt->joint = m->eff_joint[e];
@@ -351,14 +349,13 @@ static aqs_status singular(aqs_linkage *L, const aba_joint *jt)
 static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, double *Ia, double *pa)
 {
     const aba_state *a = &L->aba;
-    const joint_def *jd = &L->joints[jt->joint];
     const double *Q = L->tau + jt->voff;
     double IA[36], S[36], Dinv[36], w[6], F[36], DU[36];
     const int32_t mo = a->moff[jt - a->joint];
     double *U = a->Um + 6 * mo, *u = a->um + mo;
     int d = joint_nv(jt->type), i, j, r;
     kin_unpack_inertia(nd->IA, IA);
-    joint_subspace(jd, L->q + jt->qoff, S);
+    joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
     for (j = 0; j < d; j++) {
         double s = 0.0;
         for (r = 0; r < 6; r++) {
@@ -405,11 +402,9 @@ static aqs_status backward(aqs_linkage *L)
     aqs_status st;
     const int32_t ahead = prefetch_ahead(m->ne);
     for (i = 0; i < m->nloaded_comps; i++) { /* pA starts at minus the loads */
-        int32_t c = m->loaded_comps[i], pos = a->pos_of_comp[c];
-        double *pA = a->node[pos].pA, f[6], C[9];
-        memcpy(f, m->comp_force + 6 * (size_t)c, sizeof f);
-        if (kin_align(&a->joint[pos], C)) kin_align_vec(C, f); /* into the aligned frame */
-        for (k = 0; k < 6; k++) pA[k] -= f[k];
+        int32_t c = m->loaded_comps[i];
+        double *pA = a->node[a->pos_of_comp[c]].pA;
+        for (k = 0; k < 6; k++) pA[k] -= m->comp_force[6 * c + k];
     }
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
@@ -484,12 +479,11 @@ static aqs_status backward(aqs_linkage *L)
 static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, double *ac)
 {
     const aba_state *a = &L->aba;
-    const joint_def *jd = &L->joints[jt->joint];
     const int32_t mo = a->moff[jt - a->joint];
     const double *U = a->Um + 6 * mo, *u = a->um + mo;
     double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
     int d = joint_nv(jt->type), i, j;
-    joint_subspace(jd, L->q + jt->qoff, S);
+    joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
     (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
     for (j = 0; j < d; j++) {
         double v = u[j];
@@ -537,10 +531,6 @@ static void forward(aqs_linkage *L)
         }
         kin_inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
-        {
-            double C[9];
-            if (kin_align(jt, C)) kin_unalign_vec(C, f); /* cforce: the composite's frame */
-        }
         memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
         memset(nd->pA, 0, sizeof nd->pA);
     }
@@ -573,7 +563,7 @@ void aba_welded_forces(aqs_linkage *L)
                 const joint_def *jd = &L->joints[m->eff_joint[e]];
                 double fj[6];
                 pose J;
-                joint_child_pose(jd, L->q + jd->qoff, &J);
+                joint_child_pose_aligned(jd, L->q + jd->qoff, &J); /* handle frames: the aligned ones */
                 spatial_xform_force_back(&J, f, fj);
                 for (i = 0; i < 6; i++) x[6 * h + i] = -fj[i];
             }

@@ -11,6 +11,7 @@
 #include "avx.h"
 #include "dense.h"
 #include "frames.h"
+#include "kintree.h"
 #include "model.h"
 #include "rounding.h"
 #include "stale.h"
@@ -116,11 +117,11 @@ void dca_leaf_b(aqs_linkage *L, int32_t n)
     double acc[6], X[36];
     int32_t i;
     if (nd->comp == L->m.ncomp) {
-        /* Root trick (MATH.md §3.7): the world accelerates by a0 = -g. */
+        /* Root trick (MATH.md §3.7): the world accelerates by a0 = -g, here
+         * in the world leaf's frame (tree.world_frame, frames.h) */
+        const double mg[3] = {-L->gravity[0], -L->gravity[1], -L->gravity[2]};
         acc[0] = acc[1] = acc[2] = 0.0;
-        acc[3] = -L->gravity[0];
-        acc[4] = -L->gravity[1];
-        acc[5] = -L->gravity[2];
+        mat3_tvec(t->world_frame.R, mg, acc + 3);
     } else {
         const double *f = L->m.comp_force + 6 * nd->comp;
         double Y[36], w[6];
@@ -1899,7 +1900,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     if (L->dca_form == AQS_DCA_FORM_PHI) return dca_phi_node_update(L, n);
     /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
-    joint_subspace(jd, q, S);
+    joint_subspace_aligned(jd, q, S); /* the aligned frames (joint.h) */
     spatial_xform_motion(J, bA + 6 * C->ka, bk); /* b^A_k in the child frame */
     for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
     i = hybrid_phi(L, n, S, C->d, beta, Q);
@@ -1986,7 +1987,7 @@ static void comp_acceleration(const aqs_linkage *L, int32_t c, const double *x, 
         return;
     }
     nd = &t->nodes[t->leaf_of_comp[c]];
-    P = t->poses + nd->poses;
+    P = t->poses + nd->poses; /* not the world leaf's: its own frame */
     memcpy(f, L->m.comp_force + 6 * c, sizeof f);
     for (h = 0; h < nd->nh; h++) {
         spatial_xform_force_back(&P[h], x + 6 * h, tmp);
@@ -2018,15 +2019,23 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         double fe[6], fc[6];
         if (m->eff_child[e] == c || p < 0) continue; /* the composite's own parent joint */
         for (i = 0; i < 6; i++) fe[i] = -x[6 * h + i];
-        spatial_xform_force_back(&P[h], fe, fc);
+        if (c == m->ncomp) { /* the world leaf's poses are in world_frame */
+            pose Ph;
+            frames_leaf_handle(L, t->leaf_of_comp[c], h, &Ph);
+            spatial_xform_force_back(&Ph, fe, fc);
+        } else {
+            spatial_xform_force_back(&P[h], fe, fc);
+        }
         for (i = 0; i < 6; i++) acc[6 * p + i] += fc[i];
     }
     for (k = last - 1; k >= first; k--) {
         int32_t b = m->members[k], pj = m->parent_joint[b];
         const joint_def *jd = &L->joints[pj];
         double Ib[36], Ic[36], w[6];
+        pose B;
+        kin_body_in_comp(L, b, &B);
         model_body_inertia(L, b, Ib);
-        spatial_inertia_to_parent(model_body_in_comp(m, b), Ib, Ic);
+        spatial_inertia_to_parent(&B, Ib, Ic);
         dense_matvec6(Ic, ca, w);
         for (i = 0; i < 6; i++) acc[6 * b + i] += w[i];
         if (L->load_slot[b] >= 0) {
@@ -2040,7 +2049,7 @@ void dca_welded_forces_comp(aqs_linkage *L, int32_t c, const double *x)
         }
         if (jd->type != AQS_JOINT_FIXED) continue;
         /* In b's frame about its origin. */
-        spatial_force_from_parent(model_body_in_comp(m, b), acc + 6 * b, L->cforce + 6 * pj);
+        spatial_force_from_parent(&B, acc + 6 * b, L->cforce + 6 * pj);
         if (jd->parent >= 0)
             for (i = 0; i < 6; i++) acc[6 * jd->parent + i] += acc[6 * b + i];
     }

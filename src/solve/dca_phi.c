@@ -131,7 +131,7 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
 
     /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
-    joint_subspace(jd, q, S);
+    joint_subspace_aligned(jd, q, S); /* the aligned frames (joint.h) */
 
     /* T = X Phi^A_kk X^T + Phi^B_kk, with A's k blocks moved into the child
      * frame of k (§3.6); V = T^{-1} is used only through T's Cholesky

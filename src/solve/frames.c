@@ -39,18 +39,41 @@ static void compose(const pose *a, const pose *b, pose *out)
     for (i = 0; i < 3; i++) out->p[i] = a->p[i] + (A[3 * i] * b->p[0] + A[3 * i + 1] * b->p[1] + A[3 * i + 2] * b->p[2]);
 }
 
-/* Handle-frame poses of a leaf in its composite's frame (constant). */
+void frames_world_frame(const aqs_linkage *L, pose *W)
+{
+    const tree *t = &L->t;
+    const node *nd;
+    pose_identity(W);
+    if (t->nnodes == 0) return;
+    nd = &t->nodes[t->leaf_of_comp[L->m.ncomp]];
+    if (nd->nh > 0) *W = *kin_eff_place(L, t->handles[nd->handles]);
+}
+
+/* Handle-frame poses of a leaf in its composite's frame (constant); the
+ * world leaf's in world_frame, its first handle's. */
 static void frames_leaf(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    pose *P = t->poses + nd->poses;
+    pose *P = t->poses + nd->poses, Wi;
     int32_t i;
+    const int world = nd->comp == L->m.ncomp;
+    if (world) pose_inverse(&t->world_frame, &Wi); /* set at finalize */
     for (i = 0; i < nd->nh; i++) {
         int32_t e = t->handles[nd->handles + i];
         if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
-        else kin_eff_place(L, e, &P[i]);                           /* holds e up: joint frame */
+        else if (!world) P[i] = *kin_eff_place(L, e);              /* holds e up: joint frame */
+        else if (i == 0) pose_identity(&P[i]);                     /* the world leaf's frame */
+        else pose_compose(&Wi, kin_eff_place(L, e), &P[i]);
     }
+}
+
+void frames_leaf_handle(const aqs_linkage *L, int32_t leaf, int32_t h, pose *P)
+{
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[leaf];
+    if (nd->comp == L->m.ncomp) pose_compose(&t->world_frame, &t->poses[nd->poses + h], P);
+    else *P = t->poses[nd->poses + h];
 }
 
 /* Pose of B's frame (the child frame of k) in C's frame, from the stored
@@ -70,7 +93,7 @@ void frames_node(aqs_linkage *L, int32_t n)
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     pose *P = t->poses + C->poses, Pk;
     int32_t i, ci = 0;
-    joint_child_pose(jd, L->q + jd->qoff, t->poses + nd_J(C)); /* J(q_k), used by dca.c too */
+    joint_child_pose_aligned(jd, L->q + jd->qoff, t->poses + nd_J(C)); /* J(q_k) in the aligned frames, used by dca.c too */
     child_frame_in_node(L, C, &Pk);
     for (i = 0; i < A->nh; i++)
         if (i != C->ka) P[ci++] = PA[i];
@@ -140,7 +163,8 @@ void frames_comp_world(aqs_linkage *L, int32_t comp, pose *P)
     if (comp == L->m.ncomp || t->nnodes == 0) return;
     (void)frames_poses(L); /* allocated: only recomputes (no failure) */
     /* Walk up: a B child's frame is its parent's frame times A's handle k
-     * times J(q_k); an A child shares its parent's frame. */
+     * times J(q_k); an A child shares its parent's frame; the root's is the
+     * world leaf's, world_frame. */
     for (n = t->leaf_of_comp[comp]; (parent = t->nodes[n].parent) >= 0; n = parent) {
         const node *C = &t->nodes[parent];
         if (C->b == n) {
@@ -150,21 +174,29 @@ void frames_comp_world(aqs_linkage *L, int32_t comp, pose *P)
             *P = tmp;
         }
     }
+    {
+        pose tmp;
+        pose_compose(&t->world_frame, P, &tmp);
+        *P = tmp;
+    }
 }
 
 void frames_body_world(aqs_linkage *L, int32_t body, pose *P)
 {
-    pose C;
+    pose C, B;
     frames_comp_world(L, L->m.comp_of_body[body], &C);
-    pose_compose(&C, model_body_in_comp(&L->m, body), P);
+    kin_body_in_comp(L, body, &B);
+    pose_compose(&C, &B, P);
 }
 
 void frames_load_in_comp(const aqs_linkage *L, int32_t body, const pose *comp_world,
                               double f[6])
 {
     const body_load *ld = &L->loads[body];
-    const pose *bc = model_body_in_comp(&L->m, body);
+    pose B;
+    const pose *bc = &B;
     double r[3], n[3];
+    kin_body_in_comp(L, body, &B);
     mat3_tvec(comp_world->R, ld->force, f + 3);
     mat3_tvec(comp_world->R, ld->torque, f);
     mat3_vec(bc->R, ld->point, r);

@@ -28,6 +28,16 @@ aqs_status frames_poses_alloc(aqs_linkage *L);
  * stale. AQS_OK or AQS_ENOMEM (from frames_poses_alloc). */
 aqs_status frames_poses(aqs_linkage *L);
 
+/* The world leaf's frame in the world (tree.world_frame): the joint frame of
+ * the first joint its leaf holds, in the aligned frames, constant. The
+ * grounded nodes' poses are in this frame, not the world's; the world's
+ * acceleration -g, world poses and world-fixed shapes are turned into it
+ * and out of it where they meet the tree. */
+void frames_world_frame(const aqs_linkage *L, pose *W);
+/* The pose of a leaf's handle h in its composite's frame (the world's for
+ * the world leaf, whose stored poses are in world_frame). */
+void frames_leaf_handle(const aqs_linkage *L, int32_t leaf, int32_t h, pose *P);
+
 /* World pose of a composite's frame (world: identity), O(log N) through
  * the tree's poses (recomputed first if stale: O(N) once); O(depth) up the
  * kinematic tree when the tree holds no poses, or inside an exact solve. */

@@ -53,7 +53,7 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
             ac[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5] += qd[0]; /* the aligned frame: S = e_z */
         } else {
             const int d = joint_nv(jt->type);
-            joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
+            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
             for (i = 0; i < 6; i++) {
                 double v = 0.0;
                 for (j = 0; j < d; j++) v += S[i * d + j] * qd[j];
@@ -63,11 +63,9 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
         kin_inertia_mul(jt->I, ac, nd->v.s.U);
     }
     for (i = 0; i < (homog ? 0 : m->nloaded_comps); i++) { /* minus the loads (none on the world) */
-        const int32_t c = m->loaded_comps[i], pos = a->pos_of_comp[c];
-        double *f = a->node[pos].v.s.U, fc[6], C[9];
-        memcpy(fc, m->comp_force + 6 * (size_t)c, sizeof fc);
-        if (kin_align(&a->joint[pos], C)) kin_align_vec(C, fc); /* into the aligned frame */
-        for (j = 0; j < 6; j++) f[j] -= fc[j];
+        const int32_t c = m->loaded_comps[i];
+        double *f = a->node[a->pos_of_comp[c]].v.s.U;
+        for (j = 0; j < 6; j++) f[j] -= m->comp_force[6 * c + j];
     }
     for (k = m->ne - 1; k >= 0; k--) { /* inward: children's forces are in */
         const aba_joint *jt = &a->joint[k];
@@ -80,7 +78,7 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
             sq += rk[0] * rk[0];
         } else {
             const int d = joint_nv(jt->type);
-            joint_subspace(&L->joints[jt->joint], L->q + jt->qoff, S);
+            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
             for (j = 0; j < d; j++) {
                 double s = 0.0;
                 for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
@@ -111,9 +109,6 @@ void residual_forces(const aqs_linkage *L, double *cforce)
 {
     const aba_state *a = &L->aba;
     int32_t k;
-    for (k = 0; k < L->m.ne; k++) {
-        double *f = cforce + 6 * (size_t)a->joint[k].joint, C[9];
-        memcpy(f, a->node[k].v.s.U, 6 * sizeof(double));
-        if (kin_align(&a->joint[k], C)) kin_unalign_vec(C, f); /* the composite's frame */
-    }
+    for (k = 0; k < L->m.ne; k++)
+        memcpy(cforce + 6 * (size_t)a->joint[k].joint, a->node[k].v.s.U, 6 * sizeof(double));
 }

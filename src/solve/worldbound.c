@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "dense.h"
+#include "kintree.h"
 #include "model.h"
 #include "rounding.h"
 
@@ -87,9 +88,11 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double p[3];
-        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, p);
+        pose B;
+        kin_body_in_comp(L, b, &B);
+        mat3_vec(B.R, L->bodies[b].com, p);
         for (i = 0; i < 3; i++) {
-            p[i] += model_body_in_comp(m, b)->p[i];
+            p[i] += B.p[i];
             if (p[i] < lo[i]) lo[i] = p[i];
             if (p[i] > hi[i]) hi[i] = p[i];
         }
@@ -100,8 +103,10 @@ static void leaf_sphere(const aqs_linkage *L, int32_t c, double *s, double *lmax
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double p[3], d;
-        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, p);
-        for (i = 0; i < 3; i++) p[i] += model_body_in_comp(m, b)->p[i];
+        pose B;
+        kin_body_in_comp(L, b, &B);
+        mat3_vec(B.R, L->bodies[b].com, p);
+        for (i = 0; i < 3; i++) p[i] += B.p[i];
         d = vec3_dist(p, s);
         if (d > r) r = d;
     }
@@ -139,7 +144,7 @@ static aqs_status all_paths(aqs_linkage *L, const char *fn)
             continue;
         }
         d = joint_nv(jd->type);
-        joint_subspace(jd, L->q + jd->qoff, S);
+        joint_subspace_aligned(jd, L->q + jd->qoff, S);
         pl[c] = pl[p] + sigma_rows(S, d, 3) * sigma_rows(S, d, 3);
         pa[c] = pa[p] + sigma_rows(S, d, 0) * sigma_rows(S, d, 0);
         w->pl_all = fmax(w->pl_all, pl[c]);
@@ -203,7 +208,7 @@ aqs_status worldbound_enable(aqs_linkage *L, const char *fn)
             if (jd->type != AQS_JOINT_FREE) {
                 double S[36] = {0};
                 int d = joint_nv(jd->type);
-                joint_subspace(jd, L->q + jd->qoff, S);
+                joint_subspace_aligned(jd, L->q + jd->qoff, S);
                 sa = sigma_rows(S, d, 0);
                 sl = sigma_rows(S, d, 3);
             }
@@ -266,7 +271,7 @@ void worldbound_node_update(aqs_linkage *L, int32_t n)
 void worldbound_begin(aqs_linkage *L)
 {
     struct worldbound *w = L->wb;
-    if (L->t.nnodes > 0) pose_identity(&w->wpose[L->t.root]);
+    if (L->t.nnodes > 0) w->wpose[L->t.root] = L->t.world_frame; /* the root's frame: frames.h */
     w->lower = w->lower_r = 0.0;
 }
 
@@ -344,10 +349,12 @@ static void leaf_lower(aqs_linkage *L, int32_t leaf)
     for (k = m->member_start[c]; k < m->member_start[c + 1]; k++) {
         int32_t b = m->members[k];
         double r[3], al[3], e;
-        mat3_vec(model_body_in_comp(m, b)->R, L->bodies[b].com, r);
-        r[0] += model_body_in_comp(m, b)->p[0];
-        r[1] += model_body_in_comp(m, b)->p[1];
-        r[2] += model_body_in_comp(m, b)->p[2];
+        pose B;
+        kin_body_in_comp(L, b, &B);
+        mat3_vec(B.R, L->bodies[b].com, r);
+        r[0] += B.p[0];
+        r[1] += B.p[1];
+        r[2] += B.p[2];
         vec3_cross(a, r, al);
         al[0] += a[3];
         al[1] += a[4];
@@ -413,6 +420,17 @@ static void handle_acc(const aqs_linkage *L, int32_t n, const double *lw, const 
 
 /* Handle i's acceleration (as handle_acc) in the world: angular, and the
  * linear one of the point c (world). */
+/* The root's sphere in the world: stored, like every node's, in the node's
+ * frame, which for the root is the world leaf's (tree.world_frame). */
+static void root_sphere_world(const aqs_linkage *L, double s0[4])
+{
+    const double *s = L->wb->sph + 4 * L->t.root;
+    const pose *W = &L->t.world_frame;
+    int i;
+    for (i = 0; i < 3; i++) s0[i] = W->p[i] + W->R[3 * i] * s[0] + W->R[3 * i + 1] * s[1] + W->R[3 * i + 2] * s[2];
+    s0[3] = s[3];
+}
+
 static void handle_world(const aqs_linkage *L, int32_t n, const double a[6], int32_t i, const double c[3],
                          double al[3], double lin[3])
 {
@@ -444,12 +462,14 @@ static double beyond_bound(const aqs_linkage *L, int32_t n)
     const struct worldbound *w = L->wb;
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
-    const double *s0 = w->sph + 4 * t->root, *x = t->data + nd_xf(nd);
+    const double *x = t->data + nd_xf(nd);
     const int32_t rows = 6 * nd->nh;
-    double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH];
+    double lw[6 * AQS_WB_MAXH], lwa[6 * AQS_WB_MAXH], s0[4];
     const double l = length_of(L), il = 1.0 / l;
-    double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
+    double ae[6], ale[3], line[3], mag = 0.0, best = 0.0, R0;
     int32_t i, k, r, entry = -1;
+    root_sphere_world(L, s0);
+    R0 = (s0[3] > 0.0 ? s0[3] : 0.0) + w->lmax[t->root];
     if (nd->nh > AQS_WB_MAXH) return -1.0;
     for (i = 0; i < nd->nh; i++) {
         int32_t e = t->handles[nd->handles + i];
@@ -510,9 +530,9 @@ double worldbound_key(const aqs_linkage *L, int32_t n, double a, double *beyond)
         double far = beyond_bound(L, n);
         if (far < 0.0) {
             /* bodies beyond n's held handles: anywhere in the root's sphere */
-            const double *s0 = w->sph + 4 * L->t.root;
             const pose *P = &w->wpose[n];
-            double c[3];
+            double c[3], s0[4];
+            root_sphere_world(L, s0);
             mat3_vec(P->R, s, c);
             c[0] += P->p[0];
             c[1] += P->p[1];

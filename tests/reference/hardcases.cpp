@@ -315,7 +315,10 @@ void build_chain(Case &c, int n, const std::string &shape, const std::string &lo
     for (int i = 0; i < n; ++i) {
         const int32_t b = B.body(1.0, com, 0.01, 0.1, 0.1);
         const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
-        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, shape == "oblique" ? kAxisOblique : kAxisZ);
+        // "tilted": the root joint's frame turned by 1 rad about x (the plane of the chain tilted)
+        const double tilt[4] = {std::cos(0.5), std::sin(0.5), 0.0, 0.0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, i == 0 && shape == "tilted" ? tilt : kQuat1,
+                shape == "oblique" ? kAxisOblique : kAxisZ);
         prev = b;
     }
     B.finalize();
@@ -325,7 +328,8 @@ void build_chain(Case &c, int n, const std::string &shape, const std::string &lo
     else if (shape == "nearsing")
         for (double &x : q) x = r.uniform(-1e-8, 1e-8);
     B.positions(q);
-    if (load.find('g') != std::string::npos) B.gravity(0, -9.81, 0);
+    if (load == "gout") B.gravity(0, -9.81 * kAxisOblique[1], -9.81 * kAxisOblique[2]); // half out of the plane
+    else if (load.find('g') != std::string::npos) B.gravity(0, -9.81, 0);
     if (load.find("tip") != std::string::npos) B.force(prev, 0, 1, 0, 1, 0, 0);
 }
 
@@ -558,8 +562,13 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
             [=](Case &c) { build_chain(c, n, "straight", "tip", 1); });
         // (to 10^4 links: at 10^5 the ABA is 0.23 off, the DCA 2.6e-4, and the long-double
         // reference 9.4e-6 off the quad one, beyond kTolRefLdVsQuad)
-        if (n <= 2000 || n == 10000)
+        if (n <= 2000 || n == 10000) {
             add("oblique", "g/n=" + std::to_string(n), n, [=](Case &c) { build_chain(c, n, "oblique", "g", 1); });
+            // the same chain in frames with its axes along z: gravity half out of its plane
+            add("outplane", "g/n=" + std::to_string(n), n, [=](Case &c) { build_chain(c, n, "straight", "gout", 1); });
+            // and with its root frame tilted about x instead (world-aligned gravity)
+            add("tilted", "g/n=" + std::to_string(n), n, [=](Case &c) { build_chain(c, n, "tilted", "g", 1); });
+        }
         if (n <= 100000) {
             add("chain", "folded/g/n=" + std::to_string(n) + "/seed=1", n,
                 [=](Case &c) { build_chain(c, n, "folded", "g", 1); });
