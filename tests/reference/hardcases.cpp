@@ -134,9 +134,15 @@ const KnownBad kKnownBad[] = {
     // the altmass, near_eq and lightdistal cases pass (they were listed here before).
     // Long mode: the straight chain under gravity at 10^6 links was 1.4e-12 (the ABA 1.3e-16)
     // until 2026-12-03, when the reflections stopped mixing its in-plane and out-of-plane rows
-    // (docs/math.md §13a, "Where that error sat"): no entry is left. (An empty array is not
-    // C++: the one entry below matches no case name.)
-    {"(none)", false, false, "no known-bad case"},
+    // (docs/math.md §13a, "Where that error sat").
+    // Since the aligned frames (2026-12-03, docs/math.md §13b) changed the random trees' bits:
+    // one light-distal seed's adaptive solves at 2^-10 keep the unrefined DCA's rounding in
+    // their computed joints (3.8e-12 relative, the ABA's 5.8e-16) and in the error_bound
+    // computed from them (5.4e-9 below the truth, relative): their estimate, 7.9e-9, is
+    // under the fallback's level (1e-8), and rounding_bound covers the truth (the bound-truth
+    // check passes). On main the same solves estimated 7.9e-9 too, and their bound was
+    // above the truth by the chance of the rounding (docs/hardcases.md, "The computed joints").
+    {"lightdistal/mu=1e-09/seed=6", false, true, "adaptive: unrefined DCA rounding 7.9e-9 under the fallback level"},
 };
 // The inverse-inertia form (AQS_DCA_FORM_PHI), measured on main at 90aa04b, when it was the
 // only form.
