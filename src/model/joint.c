@@ -88,7 +88,7 @@ void joint_aligned(const joint_def *j, joint_def *out)
 void joint_child_pose_aligned(const joint_def *j, const double *q, pose *P)
 {
     joint_def a;
-    if (j->type == REVOLUTE) { /* a turn about z, as rot_axis_angle gives it */
+    if (j->type == REVOLUTE) { /* a turn about z, its zz entry exactly 1 */
         const double c = cos(q[0]), s = sin(q[0]);
         pose_identity(P);
         P->R[0] = c, P->R[1] = -s, P->R[3] = s, P->R[4] = c;

@@ -142,8 +142,8 @@ typedef struct {
     int32_t ncomp;          /* composites; index ncomp is the world */
     int32_t *comp_of_body;  /* nbodies */
     pose *body_in_comp;     /* nbodies: body frame in its composite's (aligned) frame; NULL after
-                               finalize when no body is welded (all identities): read it
-                               with model_body_in_comp */
+                               finalize when no body is welded (every body a root, at
+                               (C^T, 0)): read it with kin_body_in_comp */
     int32_t *comp_root;     /* ncomp: the body whose frame is the composite's */
     double *comp_inertia;   /* ncomp x 36: spatial inertia, composite frame; NULL after
                                finalize (kin_comp_inertia has it, packed) */
@@ -236,7 +236,7 @@ typedef struct {
     int32_t qoff, voff;
     int32_t joint;    /* user joint index */
     int32_t comp;     /* the child composite */
-    pose place;       /* the joint frame in the parent composite's frame */
+    pose place;       /* the (aligned) joint frame in the parent composite's frame */
     double I[21];     /* the composite's spatial inertia, its frame, packed */
 } aba_joint;
 

@@ -431,10 +431,9 @@ aqs_status model_build(aqs_linkage *L)
     }
     for (k = 0; k < nb; k++) {
         int32_t b = m->order[k], c = m->comp_of_body[b];
-        double Ib[36], Ic[36], one[13];
+        double Ib[36], Ic[36], one[13], Cr[9];
         const body_def *bd = &L->bodies[b];
         if (c == m->ncomp) continue;
-        double Cr[9];
         if (L->joints[m->parent_joint[b]].type != AQS_JOINT_FIXED) m->comp_root[c] = b;
         one[0] = bd->mass;
         memcpy(one + 1, bd->com, 3 * sizeof(double));
