@@ -12,12 +12,16 @@
  * the same accelerations. The tilted one's articulated-body solve keeps its
  * frames as given (every C the identity), the reference; the problem is well
  * conditioned (hard cases: both within 1.3e-16 of a quad-precision
- * reference at 1,000 links). Before the aligned frames, at 400 links: the
- * oblique chain's articulated-body solve was ~1e-8 off (its error grows like
- * n^3 u), the unrefined DCA of both ~1e-11 .. 1e-8 off, and the adaptive
- * solves' certified bounds below the truth on the tilted one. Tolerance
- * 1e-14 relative: 50x the rounding seen (2e-16), 1e5x below the former
- * errors. */
+ * reference at 1,000 links). Before the aligned frames (main at 957bc39), at
+ * 400 links: the oblique chain's articulated-body solve was 5.0e-9 off (its
+ * error grows like n^3 u), the unrefined DCA 2.2e-10 (oblique) and 1.7e-11
+ * (tilted) off, and the oblique chain's adaptive solves uncertified (answered
+ * by the ABA, every joint computed); at 1,000 links the tilted chain's
+ * certified bounds fell below the truth (docs/hardcases.md). Tolerance 1e-14
+ * relative: 25x the rounding seen now (4.3e-16), 1e3x below the former
+ * errors. The constraint-force test checks the getters' frames (the solvers
+ * keep the aligned ones), which main passes too: its ABA's forces were
+ * accurate to 1e-13 there. */
 #include "testutil.h"
 
 #include <math.h>
