@@ -161,10 +161,49 @@ static void test_constraint_forces_in_body_frames(void **state)
     assert_true(test_max_abs_diff(fw[0], fw[1], 6 * N) < 1e-13 * scale);
 }
 
+/* Two roots, the world leaf's frame turned as the first root joint's: a
+ * 20-link chain 1e6 m away (first) and the tilted 400-link chain at the
+ * origin, both in planes turned alike, so the second is solved in its plane's
+ * frames too, its coordinates about the world's origin (frames.h). Its
+ * accelerations from the unrefined DCA against the tilted chain's
+ * articulated-body solve alone (the first chain is independent of it), within
+ * 1e-14 relative as above. With the first root not turned (the world leaf's
+ * frame then the world's, as before the aligned frames) this fails. */
+static void test_far_first_root(void **state)
+{
+    const double com[3] = {0.5, 0, 0}, I[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1}, g[3] = {0, -9.81, 0};
+    const double a_z[3] = {0, 0, 1}, q1[4] = {1, 0, 0, 0};
+    const double qC[4] = {cos(-0.39269908169872414), sin(-0.39269908169872414), 0, 0};
+    double ref[N], a[20 + N];
+    aqs_linkage *L = test_new_linkage();
+    int32_t prev = AQS_WORLD, b, i;
+    (void)state;
+    reference(ref);
+    for (i = 0; i < 20 + N; i++) {
+        const int first = i == 0 || i == 20;
+        const double far[3] = {1e6, 0, 0}, one[3] = {1.0, 0, 0}, zero[3] = {0, 0, 0};
+        if (i == 20) prev = AQS_WORLD;
+        assert_int_equal(aqs_body_add(L, 1.0, com, I, &b), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, prev, b, i == 0 ? far : first ? zero : one,
+                                       first ? qC : q1, a_z, NULL),
+                         AQS_OK);
+        prev = b;
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, a, 20 + N), AQS_OK);
+    assert_true(rel_err(L, a + 20, ref, 0) < 1e-14);
+    aqs_linkage_destroy(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_solver),
+        cmocka_unit_test(test_far_first_root),
         cmocka_unit_test(test_constraint_forces_in_body_frames),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

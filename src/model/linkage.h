@@ -127,8 +127,9 @@ typedef struct {
                           node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
                           (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
                           error in the subtree */
-    pose world_frame; /* the world leaf's frame in the world: the (aligned) joint frame of its
-                         first handle (frames_world_frame, docs/math.md §13b), so that the
+    pose world_frame; /* the world leaf's frame in the world: at the world's origin, turned as
+                         the (aligned) joint frame of its first handle (frames_world_frame,
+                         docs/math.md §13b), so that the
                          grounded nodes, whose frame it is, share the plane of a planar
                          linkage that the world holds; set at finalize */
     int poses_stale; /* the internal nodes' poses (and J) do not follow q: frames_poses

@@ -46,7 +46,10 @@ void frames_world_frame(const aqs_linkage *L, pose *W)
     pose_identity(W);
     if (t->nnodes == 0) return;
     nd = &t->nodes[t->leaf_of_comp[L->m.ncomp]];
-    if (nd->nh > 0) *W = *kin_eff_place(L, t->handles[nd->handles]);
+    /* its orientation only: the world's origin stays the origin, so that
+     * other roots near it keep their small coordinates however far the
+     * first one is */
+    if (nd->nh > 0) memcpy(W->R, kin_eff_place(L, t->handles[nd->handles])->R, sizeof W->R);
 }
 
 /* Handle-frame poses of a leaf in its composite's frame (constant); the
@@ -63,8 +66,11 @@ static void frames_leaf(aqs_linkage *L, int32_t n)
         int32_t e = t->handles[nd->handles + i];
         if (L->m.eff_child[e] == nd->comp) pose_identity(&P[i]); /* hangs from e: own frame */
         else if (!world) P[i] = *kin_eff_place(L, e);              /* holds e up: joint frame */
-        else if (i == 0) pose_identity(&P[i]);                     /* the world leaf's frame */
-        else pose_compose(&Wi, kin_eff_place(L, e), &P[i]);
+        else if (i > 0) pose_compose(&Wi, kin_eff_place(L, e), &P[i]); /* in world_frame */
+        else { /* the first: turned as world_frame, exactly */
+            pose_identity(&P[0]);
+            mat3_tvec(t->world_frame.R, kin_eff_place(L, e)->p, P[0].p);
+        }
     }
 }
 

@@ -28,8 +28,9 @@ aqs_status frames_poses_alloc(aqs_linkage *L);
  * stale. AQS_OK or AQS_ENOMEM (from frames_poses_alloc). */
 aqs_status frames_poses(aqs_linkage *L);
 
-/* The world leaf's frame in the world (tree.world_frame): the joint frame of
- * the first joint its leaf holds, in the aligned frames, constant. The
+/* The world leaf's frame in the world (tree.world_frame): the world's origin
+ * turned as the joint frame of the first joint its leaf holds (in the aligned
+ * frames), constant. The
  * grounded nodes' poses are in this frame, not the world's; the world's
  * acceleration -g, world poses and world-fixed shapes are turned into it
  * and out of it where they meet the tree. */
