@@ -1364,16 +1364,12 @@ static void constraint_force_out(const aqs_linkage *L, int32_t j, double out[6])
 {
     const double *f = L->cforce + 6 * (size_t)j;
     double C[9];
-    int h;
     if (!joint_align_rotation(&L->joints[j], C)) {
         memcpy(out, f, 6 * sizeof(double));
         return;
     }
-    for (h = 0; h < 6; h += 3) {
-        out[h] = C[0] * f[h] + C[1] * f[h + 1] + C[2] * f[h + 2];
-        out[h + 1] = C[3] * f[h] + C[4] * f[h + 1] + C[5] * f[h + 2];
-        out[h + 2] = C[6] * f[h] + C[7] * f[h + 1] + C[8] * f[h + 2];
-    }
+    mat3_vec(C, f, out);
+    mat3_vec(C, f + 3, out + 3);
 }
 
 AQS_API aqs_status aqs_linkage_get_constraint_forces(const aqs_linkage *cL, double *f, size_t n)

@@ -427,7 +427,8 @@ static void root_sphere_world(const aqs_linkage *L, double s0[4])
     const double *s = L->wb->sph + 4 * L->t.root;
     const pose *W = &L->t.world_frame;
     int i;
-    for (i = 0; i < 3; i++) s0[i] = W->p[i] + W->R[3 * i] * s[0] + W->R[3 * i + 1] * s[1] + W->R[3 * i + 2] * s[2];
+    mat3_vec(W->R, s, s0);
+    for (i = 0; i < 3; i++) s0[i] += W->p[i];
     s0[3] = s[3];
 }
 
