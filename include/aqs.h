@@ -577,6 +577,31 @@ AQS_API aqs_status aqs_linkage_set_rounding_fallback(aqs_linkage *linkage, doubl
  *  AQS_OK, AQS_EINVAL (NULL). */
 AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage, double *level);
 
+/** Refinement of adaptive solves (on by default): an adaptive solve whose
+ *  rounding estimate, relative as for the rounding fallback above, exceeds
+ *  level (light parts behind heavy ones, tiny floating bases) has its
+ *  computed joints refined before it returns: corrections by the DCA on the
+ *  nodes it back-substituted, with the residual of the linkage reduced to
+ *  those joints (the skipped subtrees held by their coefficients) as their
+ *  only load, each kept only when it lowers that residual, at most
+ *  aqs_linkage_set_exact_refinement's count (0 turns both off; docs/math.md
+ *  §13c). It repairs the rounding of the computed joints' own assembly and
+ *  back-substitution, not that of a skipped subtree's coefficients. Only in
+ *  the square-root DCA form and under the four joint measures; before the
+ *  rounding fallback decides (which still sees the unrefined estimate).
+ *  The first refined solve allocates 344 bytes per node of the tree (a
+ *  revolute joint's; more for joints with more freedoms) and from then on
+ *  each node update keeps its load factors. Default
+ *  AQS_ADAPTIVE_REFINEMENT_LEVEL (1e-10: above the benchmark scenes' estimates
+ *  at 2^-19, 3.7e-11 at most, where a refinement would cost 30-40 % of a
+ *  step and gain a few u); 0 turns it off. Any phase. Returns AQS_OK,
+ *  AQS_EINVAL (level not finite or < 0; nothing changed). */
+#define AQS_ADAPTIVE_REFINEMENT_LEVEL 1e-10
+AQS_API aqs_status aqs_linkage_set_adaptive_refinement(aqs_linkage *linkage, double level);
+/** The level of aqs_linkage_set_adaptive_refinement into *level. Returns
+ *  AQS_OK, AQS_EINVAL (NULL). */
+AQS_API aqs_status aqs_linkage_get_adaptive_refinement(const aqs_linkage *linkage, double *level);
+
 /** Prediction: a joint whose node's total acceleration A(C) exceeded
  *  margin x the stopping level of the last adaptive solve (the largest A a
  *  queued node may have when it stops: eps^2, (eps L)^2 for

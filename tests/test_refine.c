@@ -365,8 +365,9 @@ static void test_state_restored(void **state)
 /* An adaptive solve (eps > 0, no cap) whose heap ran empty computed every
  * joint through the DCA's back-substitution: it is refined like the exact
  * solve (within 1e-13 of the ABA, as test_altmass), and reports bound 0. A
- * solve that skips joints is not: its accelerations are bit for bit those of
- * a twin with the refinement off. */
+ * solve that skips joints is not (with the adaptive solve's own refinement
+ * off): its accelerations are bit for bit those of a twin with the
+ * refinement off. */
 static void test_adaptive_all(void **state)
 {
     aqs_linkage *L = altmass(100, 1e6, 0, 3), *X = altmass(100, 1e6, 0, 3);
@@ -399,8 +400,11 @@ static void test_adaptive_all(void **state)
     assert_int_equal(aqs_linkage_get_accelerations(X, qx, (size_t)nv), AQS_OK);
     assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-13);
     assert_true(test_rel_diff(qx, qa, (size_t)nv) > 1e-12); /* the unrefined twin: not reached */
-    /* a solve that skips joints: not refined (the rounding fallback off: at
-     * this mass ratio it would answer with the ABA, test_rounding_fallback) */
+    /* a solve that skips joints: not refined by this refinement (the rounding
+     * fallback off: at this mass ratio it would answer with the ABA,
+     * test_rounding_fallback; the adaptive solve's own refinement off too,
+     * tests/test_arefine.c) */
+    assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.125), AQS_OK);

@@ -18,6 +18,7 @@
 #include "frames.h"
 #include "linkage.h"
 #include "model.h"
+#include "arefine.h"
 #include "refine.h"
 #include "stale.h"
 #include "totalacc.h"
@@ -134,6 +135,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     autopath_init(L);
     L->refine_max = AQS_REFINEMENT_MAX;
     L->rfb_level = AQS_ROUNDING_FALLBACK_LEVEL;
+    L->arf_level = AQS_ADAPTIVE_REFINEMENT_LEVEL;
     *out = L;
     return AQS_OK;
 }
@@ -149,6 +151,7 @@ static void free_solver(aqs_linkage *L)
     adaptive_free(L);
     worldbound_free(L);
     refine_free(L);
+    arefine_free(L);
     totalacc_free(L);
     assembly_free(L);
     model_free(L);
@@ -1074,6 +1077,26 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *cL, doub
     CHECK_LINKAGE(L);
     CHECK_PTR(L, fn, level);
     *level = L->rfb_level;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_set_adaptive_refinement(aqs_linkage *L, double level)
+{
+    static const char fn[] = "aqs_linkage_set_adaptive_refinement";
+    CHECK_LINKAGE(L);
+    if (!isfinite(level) || level < 0.0)
+        return lk_fail(L, AQS_EINVAL, "%s: level = %g must be finite and >= 0", fn, level);
+    L->arf_level = level;
+    return AQS_OK;
+}
+
+AQS_API aqs_status aqs_linkage_get_adaptive_refinement(const aqs_linkage *cL, double *level)
+{
+    static const char fn[] = "aqs_linkage_get_adaptive_refinement";
+    aqs_linkage *L = (aqs_linkage *)cL;
+    CHECK_LINKAGE(L);
+    CHECK_PTR(L, fn, level);
+    *level = L->arf_level;
     return AQS_OK;
 }
 

@@ -295,6 +295,9 @@ void assembly_free(aqs_linkage *L)
     lk_free(L, t->data);
     lk_free(L, t->rnd_x);
     lk_free(L, t->rnd_node);
+    lk_free(L, t->lf);
+    lk_free(L, t->lfoff);
+    lk_free(L, t->lfok);
     lk_free(L, t->node_of_eff);
     lk_free(L, t->leaf_of_comp);
     lk_free(L, t->scratch);

@@ -127,6 +127,11 @@ typedef struct {
                           node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
                           (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
                           error in the subtree */
+    double *lf;         /* the load factors (src/solve/dca.c dca_loads_enable), at lfoff per
+                           internal node, valid where lfok; NULL unless an adaptive solve
+                           was refined (src/solve/arefine.c) */
+    int64_t *lfoff;
+    unsigned char *lfok;
     pose world_frame; /* the world leaf's frame in the world: at the world's origin, turned as
                          the (aligned) joint frame of its first handle (frames_world_frame,
                          docs/math.md §13b), so that the
@@ -221,6 +226,7 @@ typedef struct {
     double rounding;        /* aqs_solve_stats.rounding_bound */
     double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */
     int certified;          /* aqs_solve_stats.certified */
+    int32_t arefined;       /* corrections of the computed joints the last adaptive solve kept (src/solve/refine.c) */
     int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
 
@@ -351,11 +357,14 @@ struct aqs_linkage {
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */
     double rfb_level;     /* aqs_linkage_set_rounding_fallback's level (0: off) */
+    double arf_level;     /* aqs_linkage_set_adaptive_refinement's level (0: off) */
     int32_t rfb_left;     /* exact solves left in a rounding fallback's run */
     int rfb_last;         /* the last solve was exact because of the rounding fallback */
     aba_state aba;
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
     struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
+    struct arefine *arf;   /* the adaptive solve's refinement arrays (src/solve/arefine.c); NULL
+                              until an adaptive solve refines */
     struct refine *rf;     /* the exact DCA solve's refinement arrays (src/solve/refine.c); NULL until
                               an exact DCA solve refines */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */

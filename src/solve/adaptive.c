@@ -12,6 +12,7 @@
 #include "dca.h"
 #include "frames.h"
 #include "heap.h"
+#include "arefine.h"
 #include "rounding.h"
 #include "stale.h"
 #include "totalacc.h"
@@ -325,7 +326,54 @@ static void run(aqs_linkage *L, heap *h, double eps)
         for (i = 0; i < nk; i++) push(L, h, kids[i]);
     }
     s->heap_size = h->size;
-    predict_next(L, eps);
+}
+
+/* After the computed joints' handle forces moved (refine_adaptive): the
+ * queued nodes' A from their new handle forces, the heap rebuilt in place
+ * (entry i is read before a push can move anything at or above it), and the
+ * sums and the lower bound L from what is computed and queued now. */
+static void requeue(aqs_linkage *L, heap *h)
+{
+    solve_state *s = &L->s;
+    const int32_t size = h->size;
+    int32_t i;
+    s->comp_sq = 0.0;
+    s->lower = 0.0;
+    for (i = 0; i < s->nprocessed; i++) {
+        const joint_def *jd = &L->joints[L->m.eff_joint[L->t.nodes[s->processed[i]].joint]];
+        if (jd->type != AQS_JOINT_FREE) {
+            const double q = norm_qdd(L, jd);
+            s->comp_sq += q * q;
+            if (q > s->lower) s->lower = q;
+        }
+    }
+    s->sum = 0.0;
+    for (i = 0; i < size; i++) {
+        const int32_t n = h->item[i];
+        h->size = i;
+        push(L, h, n);
+    }
+    resum(L, h);
+}
+
+/* The stopping measure's rounding estimate, then the computed joints refined
+ * where it says they lose digits (docs/math.md §13c), and the run continued
+ * if their new handle forces raised the bound. */
+static void refine_run(aqs_linkage *L, heap *h, double eps)
+{
+    solve_state *s = &L->s;
+    rounding_finish(L);
+    s->arefined = 0;
+    /* nothing queued: every joint computed, the exact solve's refinement
+     * follows (api.c, refine_exact) */
+    if (!(L->arf_level > 0.0) || s->metric >= AQS_METRIC_ABS_WORLD || s->all || s->nprocessed == 0 || h->size == 0 ||
+        L->dca_form != AQS_DCA_FORM_SQRT || !(s->rounding_rel > L->arf_level))
+        return;
+    s->arefined = arefine_solve(L);
+    if (s->arefined == 0) return;
+    requeue(L, h);
+    run(L, h, eps);
+    rounding_finish(L);
 }
 
 /* A solve that computed every joint: no bound, nothing queued. */
@@ -408,8 +456,9 @@ void adaptive_solve(aqs_linkage *L)
             push(L, &h, t->root);
         }
         run(L, &h, s->eps);
+        refine_run(L, &h, s->eps);
+        predict_next(L, s->eps);
     }
-    rounding_finish(L);
     stale_set_refinable(L, 1);
 }
 
@@ -421,7 +470,8 @@ void adaptive_refine(aqs_linkage *L, double eps)
     h.size = s->heap_size;
     s->capped = 0;
     run(L, &h, eps);
-    rounding_finish(L);
+    refine_run(L, &h, eps);
+    predict_next(L, eps);
 }
 
 void adaptive_integrate(aqs_linkage *L, double h)

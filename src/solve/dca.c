@@ -1068,6 +1068,116 @@ DCA_TARGET_AVX static int32_t jc_outer_avx(const double *X, int32_t ncol, int32_
 }
 #endif
 
+/* ---- The load factors (dca_loads_enable): what rho, gamma and b_C take from
+ * the loads, rho = -U beta + G2 Q, gamma = W beta + U^T Q (W = E^T E, or the
+ * rigid join's), b_C = b_o - FX^T beta - QX^T Q, kept per node when enabled so
+ * that a change of loads alone (src/solve/arefine.c's corrections) costs no
+ * reflection. Layout per internal node at lfoff: W (36), U (6 d), G2 (d d). */
+
+static void keep_load_factors(tree *t, int32_t n, const double *U, const double *G2, const double *E,
+                              const double *W, int32_t c)
+{
+    const node *C = &t->nodes[n];
+    double *o;
+    int32_t i, j, k;
+    if (!t->lf) return;
+    o = t->lf + t->lfoff[n];
+    if (E) {
+        for (i = 0; i < 6; i++)
+            for (j = 0; j < 6; j++) {
+                double x = 0.0;
+                for (k = 0; k < c; k++) x += E[6 * k + i] * E[6 * k + j];
+                o[6 * i + j] = x;
+            }
+    } else {
+        memcpy(o, W, 36 * sizeof(double));
+    }
+    memcpy(o + 36, U, 6 * (size_t)C->d * sizeof(double));
+    memcpy(o + 36 + 6 * C->d, G2, (size_t)C->d * C->d * sizeof(double));
+    t->lfok[n] = 1;
+}
+
+aqs_status dca_loads_enable(aqs_linkage *L)
+{
+    tree *t = &L->t;
+    int64_t off = 0;
+    int32_t k;
+    if (t->lf) return AQS_OK;
+    t->lfoff = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nnodes + 1, sizeof(int64_t));
+    t->lfok = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nnodes + 1, 1);
+    if (!t->lfoff || !t->lfok) {
+        dca_loads_free(L);
+        return AQS_ENOMEM;
+    }
+    for (k = 0; k < t->nnodes; k++) {
+        const node *nd = &t->nodes[k];
+        t->lfoff[k] = off;
+        if (nd->joint >= 0) off += 36 + 6 * (int64_t)nd->d + (int64_t)nd->d * nd->d;
+    }
+    if (!(t->lf = lk_calloc_in(L, LK_MEM_DCA, (size_t)off + 1, sizeof(double)))) {
+        dca_loads_free(L);
+        return AQS_ENOMEM;
+    }
+    return AQS_OK;
+}
+
+void dca_loads_free(aqs_linkage *L)
+{
+    tree *t = &L->t;
+    lk_free(L, t->lf);
+    lk_free(L, t->lfoff);
+    lk_free(L, t->lfok);
+    t->lf = NULL;
+    t->lfoff = NULL;
+    t->lfok = NULL;
+}
+
+int dca_node_loads(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
+    const double *Q = L->tau + jd->voff, *bA = t->data + A->bv, *bB = t->data + B->bv;
+    const double *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *o, *W, *U, *G2;
+    double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C), *bC = t->data + C->bv;
+    double beta[6], bk[6];
+    const int32_t d = C->d, orows = 6 * C->nh, nAo = A->nh - 1;
+    int32_t i, j, r, ci;
+    if (!t->lf || !t->lfok[n] || L->dca_form != AQS_DCA_FORM_SQRT) return -1;
+    o = t->lf + t->lfoff[n];
+    W = o;
+    U = o + 36;
+    G2 = o + 36 + 6 * d;
+    spatial_xform_motion(t->poses + nd_J(C), bA + 6 * C->ka, bk);
+    for (i = 0; i < 6; i++) beta[i] = bk[i] - bB[6 * C->kb + i];
+    for (r = 0; r < d; r++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
+        for (j = 0; j < d; j++) x += G2[d * r + j] * Q[j];
+        rho[r] = x;
+    }
+    for (i = 0; i < 6; i++) {
+        double x = 0.0;
+        for (j = 0; j < 6; j++) x += W[6 * i + j] * beta[j];
+        for (r = 0; r < d; r++) x += U[6 * r + i] * Q[r];
+        gamma[i] = x;
+    }
+    for (ci = 0; ci < C->nh; ci++) {
+        const int a = ci < nAo;
+        const int32_t src = a ? (ci < C->ka ? ci : ci + 1) : (ci - nAo < C->kb ? ci - nAo : ci - nAo + 1);
+        const double *bs = (a ? bA : bB) + 6 * src;
+        for (r = 0; r < 6; r++) {
+            const int32_t ro = 6 * ci + r;
+            double x = bs[r];
+            for (i = 0; i < 6; i++) x -= FX[(int64_t)i * orows + ro] * beta[i];
+            for (j = 0; j < d; j++) x -= QX[(int64_t)j * orows + ro] * Q[j];
+            bC[ro] = x;
+        }
+    }
+    return 0;
+}
+
 static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32_t d, const double *Tc,
                               const double *X, const double *Lc, const double *Kp, int32_t ncol, int32_t w,
                               const double beta[6], const double *Q, const double *bo, double *kq)
@@ -1245,6 +1355,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
 #endif
     memcpy(gamma, gw, sizeof gw);
     rounding_node(L, n, U, G2, E, NULL, beta, Q, Lc, Tc, ncol, 0.0, bo);
+    keep_load_factors(t, n, U, G2, E, NULL, c);
     return 0;
 }
 
@@ -1496,6 +1607,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         }
         rounding_node(L, n, U, G2, NULL, W, beta, Q, NULL, NULL, 0, pm * (dt / dn), bov);
     }
+    keep_load_factors(t, n, U, G2, NULL, W, 0);
     return 0;
 }
 
@@ -1897,6 +2009,7 @@ int dca_node_update(aqs_linkage *L, int32_t n)
     double beta[6], bk[6];
     int32_t i;
 
+    if (t->lf) t->lfok[n] = 0; /* kept again by a successful update (keep_load_factors) */
     if (L->dca_form == AQS_DCA_FORM_PHI) return dca_phi_node_update(L, n);
     /* J = J(q_k), refreshed by frames_node; X = spatial_from_parent(J)
      * maps k's joint frame to its child frame. */
@@ -1927,6 +2040,46 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
     const node *C = &t->nodes[n];
     const int32_t rows = 6 * C->nh;
     memcpy(out, t->data + nd_U(C) + (int64_t)r * rows, sizeof(double) * (size_t)rows);
+}
+
+/* (Phi x + b) from node n's stored handle forces x, every handle in its own
+ * frame: Phi = G I^-1 G^T + Lambda Lambda^T (square-root form; I^-1 = 0 when
+ * grounded). Returns 0, or -1 when the mass properties have no inverse. */
+int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a)
+{
+    const tree *t = &L->t;
+    const node *nd = &t->nodes[n];
+    const double *b = t->data + nd->bv, *x = t->data + nd_xf(nd);
+    const pose *P = t->poses + nd->poses;
+    const int32_t rows = 6 * nd->nh;
+    int32_t i, j, c;
+    memcpy(a, b, (size_t)rows * sizeof(double));
+    if (!nd->grounded) {
+        double w[6] = {0, 0, 0, 0, 0, 0}, tmp[6], acc[6], Y[36];
+        for (j = 0; j < nd->nh; j++) {
+            spatial_xform_force_back(&P[j], x + 6 * j, tmp);
+            for (i = 0; i < 6; i++) w[i] += tmp[i];
+        }
+        if (mp_inverse_factor(t->data + nd_ic(nd), Y) == 0) {
+            dense_tmatvec6(Y, w, tmp);
+            dense_matvec6(Y, tmp, acc);
+        } else if (nd->joint < 0) {
+            model_inverse_apply(L, nd->comp, w, acc);
+        } else {
+            return -1;
+        }
+        for (j = 0; j < nd->nh; j++) {
+            spatial_xform_motion(&P[j], acc, tmp);
+            for (i = 0; i < 6; i++) a[6 * j + i] += tmp[i];
+        }
+    }
+    for (c = 0; c < nd->rank; c++) {
+        const double *lam = t->data + nd_lam(nd) + c;
+        double s = 0.0;
+        for (i = 0; i < rows; i++) s += lam[(int64_t)i * nd->lld] * x[i];
+        for (i = 0; i < rows; i++) a[i] += lam[(int64_t)i * nd->lld] * s;
+    }
+    return 0;
 }
 
 void dca_node_backsub(aqs_linkage *L, int32_t n)

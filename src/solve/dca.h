@@ -22,6 +22,16 @@ void dca_leaf_b(aqs_linkage *L, int32_t n);
  * position and force, in the linkage's DCA form. Returns 0, or -1 when
  * the articulated inertia is numerically singular. */
 int dca_node_update(aqs_linkage *L, int32_t n);
+/* Keep each node's load factors from its next update on (what rho, gamma and
+ * b take from beta and Q; square-root form): 36 + 6 d + d^2 doubles per internal
+ * node, for dca_node_loads. AQS_OK or AQS_ENOMEM. */
+aqs_status dca_loads_enable(aqs_linkage *L);
+void dca_loads_free(aqs_linkage *L);
+/* Internal node n's rho, gamma and b from its children's b and its joint force
+ * alone, by the factors its last update kept (the positions unchanged since):
+ * the same values as dca_node_update in exact arithmetic. 0, or -1 when no
+ * factors are kept for it (then dca_node_update). */
+int dca_node_loads(aqs_linkage *L, int32_t n);
 /* The inverse-inertia form of dca_node_update (src/solve/dca_phi.c). */
 int dca_phi_node_update(aqs_linkage *L, int32_t n);
 /* out (6 nh) = M W g for a 6-vector g (the handle part of g^T [W M^T]):
@@ -29,6 +39,10 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n);
 void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *out);
 /* out (6 nh) = row r < d of U M^T (= QX). */
 void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out);
+/* a (6 nh) = Phi x + b: the accelerations of node n's handles from its stored
+ * handle forces, each in its handle's frame (square-root form). 0, or -1 if
+ * I^-1 does not exist. */
+int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces: qdd = rho - QX x, f = gamma + FX x. */

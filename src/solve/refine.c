@@ -425,3 +425,4 @@ void refine_exact(aqs_linkage *L)
     }
     L->s.refined = kept;
 }
+

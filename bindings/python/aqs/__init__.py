@@ -77,7 +77,7 @@ from ._lib import (EINVAL, EMODEL, ENOMEM, ENUMERIC, ERANGE, ESIZE, ESTATE, JOIN
                    JOINT_REVOLUTE, JOINT_SPHERICAL, JOINT_UNIVERSAL, JOINT_BOUND_HEAP_TOP,
                    JOINT_BOUND_SUM, JOINT_BOUNDS, TREE_BISECTION, TREE_BUILDERS,
                    EXACT_ABA, EXACT_DCA, EXACT_SOLVERS, EXACT_SOLVER_NAMES, FALLBACK_RUN, PREDICTION_MARGIN, REFINEMENT_MAX,
-                   ROUNDING_FALLBACK_LEVEL,
+                   ROUNDING_FALLBACK_LEVEL, ADAPTIVE_REFINEMENT_LEVEL,
                    PATH_ADAPTIVE, PATH_EXACT_ABA, PATH_EXACT_DCA,
                    DCA_FORM_SQRT, DCA_FORM_PHI, DCA_FORMS, DCA_FORM_NAMES,
                    TREE_CONTRACTION, METRIC_ABS_JOINT, METRIC_ABS_LINKAGE, METRIC_REL_JOINT, METRIC_REL_LINKAGE,
@@ -99,7 +99,7 @@ __all__ = [
     "JOINT_BOUND_HEAP_TOP", "JOINT_BOUND_SUM", "JOINT_BOUNDS",
     "TREE_CONTRACTION", "TREE_BISECTION", "TREE_BUILDERS",
     "EXACT_ABA", "EXACT_DCA", "EXACT_SOLVERS", "FALLBACK_RUN", "PREDICTION_MARGIN", "REFINEMENT_MAX",
-    "ROUNDING_FALLBACK_LEVEL",
+    "ROUNDING_FALLBACK_LEVEL", "ADAPTIVE_REFINEMENT_LEVEL",
     "PATH_ADAPTIVE", "PATH_EXACT_ABA", "PATH_EXACT_DCA",
     "DCA_FORM_SQRT", "DCA_FORM_PHI", "DCA_FORMS",
     "SHAPE_SPHERE", "SHAPE_CAPSULE", "SHAPE_BOX", "SHAPE_CYLINDER", "SHAPE_HULL", "SHAPES",
@@ -931,6 +931,24 @@ class Linkage:
         """The level of set_rounding_fallback (0.0: off)."""
         value = ctypes.c_double()
         self._call("aqs_linkage_get_rounding_fallback", ctypes.byref(value))
+        return value.value
+
+    def set_adaptive_refinement(self, level):
+        """Refinement of adaptive solves (aqs_linkage_set_adaptive_refinement;
+        on by default at aqs.ADAPTIVE_REFINEMENT_LEVEL = 1e-10): an adaptive
+        solve whose rounding estimate, relative as for set_rounding_fallback,
+        exceeds level has its computed joints refined by the DCA on the nodes
+        it back-substituted (at most exact_refinement corrections, each kept
+        only when it lowers the reduced residual). level >= 0; 0 turns it
+        off. Square-root DCA form and joint measures only. Any phase."""
+        f = "aqs_linkage_set_adaptive_refinement"
+        self._call(f, _number(level, f, "level"))
+
+    @property
+    def adaptive_refinement(self):
+        """The level of set_adaptive_refinement (0.0: off)."""
+        value = ctypes.c_double()
+        self._call("aqs_linkage_get_adaptive_refinement", ctypes.byref(value))
         return value.value
 
     def set_prediction(self, margin):

@@ -101,6 +101,8 @@ EXACT_DCA = 1  # full divide-and-conquer back-substitution over the assembly tre
 FALLBACK_RUN = 15
 # The rounding fallback's default level (AQS_ROUNDING_FALLBACK_LEVEL).
 ROUNDING_FALLBACK_LEVEL = 1e-8
+# The adaptive refinement's default level (AQS_ADAPTIVE_REFINEMENT_LEVEL).
+ADAPTIVE_REFINEMENT_LEVEL = 1e-10
 
 # Most corrections of an exact DCA solve, and the default (AQS_REFINEMENT_MAX).
 REFINEMENT_MAX = 3
@@ -389,6 +391,8 @@ PROTOTYPES = {
     "aqs_linkage_get_exact_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_rounding_fallback": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_rounding_fallback": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
+    "aqs_linkage_set_adaptive_refinement": (status_t, [linkage_p, ctypes.c_double]),
+    "aqs_linkage_get_adaptive_refinement": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_prediction": (status_t, [linkage_p, ctypes.c_double]),
     "aqs_linkage_get_prediction": (status_t, [linkage_p, ctypes.POINTER(ctypes.c_double)]),
     "aqs_linkage_set_auto": (status_t, [linkage_p, ctypes.c_int32]),

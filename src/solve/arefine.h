@@ -1,0 +1,20 @@
+/* arefine.h -- iterative refinement of an adaptive solve's computed joints
+ * (docs/math.md §13c): corrections by the DCA on the processed nodes, with the
+ * residual of the reduced system (the queued subtrees and leaves held by their
+ * coefficients) as their only load. */
+#ifndef AQS_AREFINE_H
+#define AQS_AREFINE_H
+
+#include "linkage.h"
+
+/* After an adaptive solve (square-root form, the coefficients current): up
+ * to L->refine_max corrections of the computed joints' accelerations,
+ * constraint forces and the handle forces of the processed nodes and their
+ * children (the queued nodes' included), each kept only when it lowers the
+ * reduced system's residual. The stored b, rho, gamma and rounding levels are
+ * the solve's again on return. Returns the corrections kept (0: nothing
+ * changed; also when out of memory, and the next call tries again). */
+int32_t arefine_solve(aqs_linkage *L);
+void arefine_free(aqs_linkage *L);
+
+#endif
