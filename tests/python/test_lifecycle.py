@@ -111,7 +111,7 @@ CALLS = [
     ("set_joint_bound", ("sum",)), ("set_exact_solver", ("dca",)), ("exact_solver", ()),
     ("set_dca_form", ("phi",)), ("dca_form", ()),
     ("set_exact_refinement", (1,)), ("exact_refinement", ()),
-    ("set_exact_fallback", (0.5,)), ("exact_fallback", ()), ("set_rounding_fallback", (1e-9,)), ("rounding_fallback", ()), ("set_prediction", (16.0,)), ("prediction", ()), ("set_auto", (False,)), ("auto", ()), ("refine", (1e-4,)), ("stats", ()), ("joint_computed", (0,)),
+    ("set_exact_fallback", (0.5,)), ("exact_fallback", ()), ("set_rounding_fallback", (1e-9,)), ("rounding_fallback", ()), ("set_adaptive_refinement", (1e-9,)), ("adaptive_refinement", ()), ("set_prediction", (16.0,)), ("prediction", ()), ("set_auto", (False,)), ("auto", ()), ("refine", (1e-4,)), ("stats", ()), ("joint_computed", (0,)),
     ("accelerations", ()), ("joint_acceleration", (0,)),
     ("positions", ()), ("set_positions", ([0.0],)), ("joint_position", (0,)),
     ("set_joint_position", (0, 0.0)), ("constraint_forces", ()), ("joint_constraint_force", (0,)),
