@@ -587,8 +587,9 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage,
  *  aqs_linkage_set_exact_refinement's count (0 turns both off; docs/math.md
  *  §13c). It repairs the rounding of the computed joints' own assembly and
  *  back-substitution, not that of a skipped subtree's coefficients. Only in
- *  the square-root DCA form and under the four joint measures; before the
- *  rounding fallback decides (which still sees the unrefined estimate).
+ *  the square-root DCA form and under the four joint measures; not when the
+ *  rounding fallback answers the solve (it still sees the unrefined
+ *  estimate).
  *  The first refined solve allocates 344 bytes per node of the tree (a
  *  revolute joint's; more for joints with more freedoms) and from then on
  *  each node update keeps its load factors. Default

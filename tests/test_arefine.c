@@ -342,6 +342,61 @@ static void test_moving(void **state)
     aqs_linkage_destroy(C);
 }
 
+/* aqs_linkage_refine continues a refined solve to a smaller eps: the joints it
+ * adds are computed from the refined handle forces and refined again (within
+ * 1e-14 of the ABA), down to every joint. A solve the rounding fallback answers is not refined
+ * first (its estimate is above the fallback's level: the ABA's answer). */
+static void test_continue_and_fallback(void **state)
+{
+    aqs_linkage *L = lightdistal(1e-9, 3), *A = altmass(100, 1e6, 2);
+    double ref[40], q[40], m = 0.0, e = 0.0;
+    aqs_solve_stats st;
+    int32_t i, n1, n2 = 0;
+    (void)state;
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, ref, 40), AQS_OK);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    n1 = st.computed_joints;
+    assert_int_equal(aqs_linkage_refine(L, ldexp(1.0, -3)), AQS_OK);
+    assert_true(L->s.arefined >= 1);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_true(st.computed_joints > n1 && st.computed_joints < 40);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q, 40), AQS_OK);
+    for (i = 0; i < 40; i++) {
+        int32_t c;
+        assert_int_equal(aqs_joint_get_computed(L, i, &c), AQS_OK);
+        m = fmax(m, fabs(ref[i]));
+        if (c) {
+            n2++;
+            e = fmax(e, fabs(q[i] - ref[i]));
+        }
+    }
+    assert_int_equal(n2, st.computed_joints);
+    assert_true(e <= 1e-14 * m);
+    /* down to every joint: refined too (aqs_linkage_refine has no exact
+     * refinement after it) */
+    assert_int_equal(aqs_linkage_refine(L, ldexp(1.0, -40)), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    assert_int_equal(st.computed_joints, 40);
+    assert_true(L->s.arefined >= 1);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q, 40), AQS_OK);
+    for (i = 0, e = 0.0; i < 40; i++) e = fmax(e, fabs(q[i] - ref[i]));
+    assert_true(e <= 1e-14 * m);
+    aqs_linkage_destroy(L);
+    /* the fallback on (the default): the ABA answers, nothing refined */
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, 0.0625), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_get_stats(A, &st), AQS_OK);
+    assert_int_equal(st.rounding_fallback, 1);
+    assert_int_equal(A->s.arefined, 0);
+    assert_true(A->arf == NULL); /* its arrays were never needed */
+    aqs_linkage_destroy(A);
+}
+
 /* aqs_linkage_set_adaptive_refinement: the default, 0 off, negative and
  * non-finite levels refused with nothing changed, NULL refused. */
 static void test_setting(void **state)
@@ -426,6 +481,7 @@ int main(void)
         cmocka_unit_test(test_hard_families), cmocka_unit_test(test_joint_types),
         cmocka_unit_test(test_state_restored), cmocka_unit_test(test_moving),
         cmocka_unit_test(test_setting),        cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_continue_and_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -359,15 +359,20 @@ static void requeue(aqs_linkage *L, heap *h)
 /* The stopping measure's rounding estimate, then the computed joints refined
  * where it says they lose digits (docs/math.md §13c), and the run continued
  * if their new handle forces raised the bound. */
-static void refine_run(aqs_linkage *L, heap *h, double eps)
+static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
 {
     solve_state *s = &L->s;
     rounding_finish(L);
     s->arefined = 0;
-    /* nothing queued: every joint computed, the exact solve's refinement
-     * follows (api.c, refine_exact) */
-    if (!(L->arf_level > 0.0) || s->metric >= AQS_METRIC_ABS_WORLD || s->all || s->nprocessed == 0 || h->size == 0 ||
+    if (!(L->arf_level > 0.0) || s->metric >= AQS_METRIC_ABS_WORLD || s->all || s->nprocessed == 0 ||
         L->dca_form != AQS_DCA_FORM_SQRT || !(s->rounding_rel > L->arf_level))
+        return;
+    /* after a solve (api.c): with nothing queued every joint was computed and
+     * the exact solve's refinement follows (refine_exact); with the estimate
+     * above the rounding fallback's level the ABA answers it
+     * (rounding_fallback_due). aqs_linkage_refine has neither. */
+    if (from_solve && (h->size == 0 || (L->rfb_level > 0.0 && s->max_computed == 0 &&
+                                        !(s->rounding_rel <= L->rfb_level))))
         return;
     s->arefined = arefine_solve(L);
     if (s->arefined == 0) return;
@@ -456,7 +461,7 @@ void adaptive_solve(aqs_linkage *L)
             push(L, &h, t->root);
         }
         run(L, &h, s->eps);
-        refine_run(L, &h, s->eps);
+        refine_run(L, &h, s->eps, 1);
         predict_next(L, s->eps);
     }
     stale_set_refinable(L, 1);
@@ -470,7 +475,7 @@ void adaptive_refine(aqs_linkage *L, double eps)
     h.size = s->heap_size;
     s->capped = 0;
     run(L, &h, eps);
-    refine_run(L, &h, eps);
+    refine_run(L, &h, eps, 0);
     predict_next(L, eps);
 }
 
