@@ -117,20 +117,25 @@ static double computed_error(const aqs_linkage *L, const double *qdd, const doub
  * off in both (it would answer these with the ABA): for every joint measure
  * and eps 2^-1, 2^-4, 2^-10, solves that skip joints. Returns the largest
  * computed-joint error of L's and X's solves. */
-static void refined_vs_off(aqs_linkage *L, aqs_linkage *X, const char *what, double *worst_on, double *worst_off)
+static void refined_vs_off(aqs_linkage *L, aqs_linkage *X, const char *what, double *worst_on, double *worst_off,
+                           double *worst_f, double *worst_fx)
 {
-    int32_t nv, mi, e, nsolves = 0;
-    double *ref, *q;
+    int32_t nv, mi, e, nsolves = 0, j;
+    double *ref, *q, *fref, *f, fm = 0.0;
     assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv), AQS_OK);
     ref = calloc((size_t)nv, sizeof *ref);
     q = calloc((size_t)nv, sizeof *q);
-    assert_non_null(ref && q);
+    fref = calloc(6 * (size_t)nv, sizeof *fref);
+    f = calloc(6 * (size_t)nv, sizeof *f);
+    assert_non_null(ref && q && fref && f);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the ABA, the default exact solver */
     assert_int_equal(aqs_linkage_get_accelerations(L, ref, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, fref, 6 * (size_t)nv), AQS_OK);
+    for (j = 0; j < 6 * nv; j++) fm = fmax(fm, fabs(fref[j]));
     assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_set_adaptive_refinement(X, 0.0), AQS_OK);
-    *worst_on = *worst_off = 0.0;
+    *worst_on = *worst_off = *worst_f = *worst_fx = 0.0;
     for (mi = 0; mi < 4; mi++)
         for (e = 1; e <= 10; e += e < 4 ? 3 : 6) {
             aqs_solve_stats st;
@@ -144,6 +149,17 @@ static void refined_vs_off(aqs_linkage *L, aqs_linkage *X, const char *what, dou
             assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
             assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
             on = computed_error(L, q, ref, nv, &nc, kMetrics[mi], &skipped);
+            {
+                double fe = 0.0, fex = 0.0;
+                assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nv), AQS_OK);
+                for (j = 0; j < 6 * nv; j++)
+                    if (!isnan(f[j])) fe = fmax(fe, fabs(f[j] - fref[j]));
+                assert_int_equal(aqs_linkage_get_constraint_forces(X, f, 6 * (size_t)nv), AQS_OK);
+                for (j = 0; j < 6 * nv; j++)
+                    if (!isnan(f[j])) fex = fmax(fex, fabs(f[j] - fref[j]));
+                *worst_f = fmax(*worst_f, fe / fm);
+                *worst_fx = fmax(*worst_fx, fex / fm);
+            }
             assert_int_equal(aqs_linkage_get_accelerations(X, q, (size_t)nv), AQS_OK);
             off = computed_error(X, q, ref, nv, &ncx, kMetrics[mi], &skipped_x);
             if (nc == nv) continue; /* every joint computed: the exact refinement's case (test_refine.c) */
@@ -161,7 +177,8 @@ static void refined_vs_off(aqs_linkage *L, aqs_linkage *X, const char *what, dou
             *worst_off = fmax(*worst_off, off);
         }
     assert_true(nsolves >= 4);
-    free(ref), free(q);
+    print_message("%s: joint forces %.2e of the largest (unrefined %.2e)\n", what, *worst_f, *worst_fx);
+    free(ref), free(q), free(fref), free(f);
 }
 
 /* 1e-14: 45 u of the largest acceleration; measured 4e-16 .. 1.9e-15 (light
@@ -172,18 +189,23 @@ static void test_hard_families(void **state)
     uint64_t seed;
     (void)state;
     for (seed = 1; seed <= 3; seed++) {
-        double on, off;
+        double on, off, fon, foff;
         aqs_linkage *L = lightdistal(1e-9, seed), *X = lightdistal(1e-9, seed);
-        refined_vs_off(L, X, "lightdistal 1e-9", &on, &off);
+        refined_vs_off(L, X, "lightdistal 1e-9", &on, &off, &fon, &foff);
         assert_true(on <= 1e-14);
         assert_true(off > 1e-12);
+        /* the joint forces against the ABA's, relative to the largest (the
+         * heavy links'): 4e-14 .. 2e-13 refined or not (what the refinement
+         * moves is far below that scale) */
+        assert_true(fon <= 1e-11 && fon <= 2.0 * foff + 1e-15);
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(X);
         L = altmass(100, 1e6, seed);
         X = altmass(100, 1e6, seed);
-        refined_vs_off(L, X, "altmass 1e6", &on, &off);
+        refined_vs_off(L, X, "altmass 1e6", &on, &off, &fon, &foff);
         assert_true(on <= 1e-14);
         assert_true(off > 1e-12);
+        assert_true(fon <= 1e-10 && fon <= 2.0 * foff + 1e-15); /* measured 3e-12 .. 7.7e-12 */
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(X);
     }
@@ -193,18 +215,21 @@ static void test_hard_families(void **state)
  * with the fixed joints the generator draws), masses over 1e4, refined at
  * every adaptive solve (a level of 1e-300): the computed joints' values
  * within 1e-12 of the ABA's (relative 2-norm over the computed dofs), and
- * never more than 2x (plus 1e-15) the unrefined twin's error. */
+ * never more than 2x (plus 1e-15) the unrefined twin's error; the joint
+ * forces it gives (computed joints, welded bodies of the leaves it reached)
+ * likewise against the ABA's. */
 static void test_joint_types(void **state)
 {
     uint64_t rng = 777;
-    int k, nref = 0, nsolve = 0;
+    int k, nref = 0, nsolve = 0, nf = 0;
     (void)state;
     for (k = 0; k < 12; k++) {
         test_tree_spec sp;
         aqs_linkage *L, *X;
         uint64_t r2;
         int32_t nv, nj, j, e, mi;
-        double *ref, *q, *qx;
+        double fe = 0.0, fex = 0.0, fmaxall = 0.0;
+        double *ref, *q, *qx, *fref, *f, *fx;
         memset(&sp, 0, sizeof sp);
         sp.nbodies = 60;
         sp.floating = k % 2;
@@ -218,10 +243,15 @@ static void test_joint_types(void **state)
         ref = calloc((size_t)nv, sizeof *ref);
         q = calloc((size_t)nv, sizeof *q);
         qx = calloc((size_t)nv, sizeof *qx);
-        assert_non_null(ref && q && qx);
+        fref = calloc(6 * (size_t)nj, sizeof *fref);
+        f = calloc(6 * (size_t)nj, sizeof *f);
+        fx = calloc(6 * (size_t)nj, sizeof *fx);
+        assert_non_null(ref && q && qx && fref && f && fx);
         assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK);
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
         assert_int_equal(aqs_linkage_get_accelerations(L, ref, (size_t)nv), AQS_OK);
+        assert_int_equal(aqs_linkage_get_constraint_forces(L, fref, 6 * (size_t)nj), AQS_OK);
+        for (j = 0; j < 6 * nj; j++) fmaxall = fmax(fmaxall, fabs(fref[j]));
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(X, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
@@ -239,6 +269,15 @@ static void test_joint_types(void **state)
                 refined = L->s.arefined;
                 assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
                 assert_int_equal(aqs_linkage_get_accelerations(X, qx, (size_t)nv), AQS_OK);
+                assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
+                assert_int_equal(aqs_linkage_get_constraint_forces(X, fx, 6 * (size_t)nj), AQS_OK);
+                for (j = 0; j < 6 * nj; j++) /* every force the solve gave (computed joints, reached welds) */
+                    if (!isnan(f[j])) {
+                        assert_false(isnan(fx[j]));
+                        fe = fmax(fe, fabs(f[j] - fref[j]));
+                        fex = fmax(fex, fabs(fx[j] - fref[j]));
+                        nf++;
+                    }
                 for (j = 0; j < nj; j++) {
                     int32_t c, off, n, i;
                     assert_int_equal(aqs_joint_get_computed(L, j, &c), AQS_OK);
@@ -256,12 +295,19 @@ static void test_joint_types(void **state)
                 assert_true(sqrt(d2 / r2n) <= 1e-12);
                 assert_true(sqrt(d2) <= 2.0 * sqrt(dx2) + 1e-15 * sqrt(r2n));
             }
-        free(ref), free(q), free(qx);
+        print_message("tree %d: joint forces %.2e of the largest (unrefined %.2e)\n", k, fe / fmaxall, fex / fmaxall);
+        /* the DCA's forces and the ABA's differ by 2e-13 .. 1.2e-12 of the
+         * largest here, refined or not (the trees are benign: the corrections
+         * are at the rounding level); not worse than unrefined */
+        assert_true(fe <= 1e-10 * fmaxall);
+        assert_true(fe <= 2.0 * fex + 1e-15 * fmaxall);
+        free(ref), free(q), free(qx), free(fref), free(f), free(fx);
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(X);
     }
     /* most solves kept a correction (the others' first one was not lower) */
-    print_message("%d of %d solves refined\n", nref, nsolve);
+    print_message("%d of %d solves refined, %d forces compared\n", nref, nsolve, nf);
+    assert_true(nf > 0);
     assert_true(2 * nref > nsolve);
 }
 

@@ -328,8 +328,9 @@ static void run(aqs_linkage *L, heap *h, double eps)
     s->heap_size = h->size;
 }
 
-/* After the computed joints' handle forces moved (refine_adaptive): the
- * queued nodes' A from their new handle forces, the heap rebuilt in place
+/* After the computed joints' handle forces moved (arefine_solve): the welded
+ * bodies' forces of the reached leaves and the queued nodes' A from their new
+ * handle forces, the heap rebuilt in place
  * (entry i is read before a push can move anything at or above it), and the
  * sums and the lower bound L from what is computed and queued now. */
 static void requeue(aqs_linkage *L, heap *h)
@@ -345,6 +346,15 @@ static void requeue(aqs_linkage *L, heap *h)
             const double q = norm_qdd(L, jd);
             s->comp_sq += q * q;
             if (q > s->lower) s->lower = q;
+        }
+    }
+    for (i = 0; i < s->nprocessed; i++) { /* the welded bodies' forces from the new handle forces */
+        const node *nd = &L->t.nodes[s->processed[i]];
+        const int32_t child[2] = {nd->a, nd->b};
+        int k;
+        for (k = 0; k < 2; k++) {
+            const node *c = &L->t.nodes[child[k]];
+            if (c->joint < 0 && L->m.comp_welded[c->comp]) dca_welded_forces_comp(L, c->comp, L->t.data + nd_xf(c));
         }
     }
     s->sum = 0.0;
