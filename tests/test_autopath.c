@@ -19,7 +19,9 @@
  *       stale each time: an adaptive solve would recompute it every time, so
  *       the model stays exact (it never pays that update to switch back),
  *       while after exact steps (the tree stale by their own moves) it does
- *       switch back. */
+ *       switch back;
+ *   (h) the adaptive refinement's cost is counted after a solve that found it
+ *       worth it. */
 #include "testutil.h"
 
 #include <math.h>
@@ -65,6 +67,11 @@ static aqs_linkage *molecule(uint64_t seed)
      * ABA here), 7x below the fallback's level (docs/math.md §10a): too
      * close for a test whose choices count every solve */
     assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    /* The same estimate is above the adaptive refinement's level, and on this
+     * backbone the refinement is worth it (the DCA's 1.5e-13): the tests
+     * below count the solve paths without it; test_refinement_priced counts
+     * it. */
+    assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 0.0), AQS_OK);
     return L;
 }
 
@@ -400,6 +407,47 @@ static void test_caller_staleness_is_no_switch(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* (h) the adaptive refinement (docs/math.md §13c) is priced: after an
+ * adaptive solve that refined its computed joints and found it worth it,
+ * the model's adaptive cost of the next solve adds COST_AREFINE per processed
+ * node; a twin with the refinement off is priced without it. */
+static void test_refinement_priced(void **state)
+{
+    aqs_linkage *A = molecule(5), *B = molecule(5);
+    aqs_solve_stats sa, sb;
+    double ea, eb, expect;
+    (void)state;
+    assert_int_equal(aqs_linkage_set_adaptive_refinement(A, AQS_ADAPTIVE_REFINEMENT_LEVEL), AQS_OK);
+    set_forces(A, 1, 3);
+    set_forces(B, 1, 3);
+    assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(B, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(A, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(B, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(B), AQS_OK);
+    sa = stats_of(A);
+    sb = stats_of(B);
+    ea = sa.nodes_processed;
+    eb = sb.nodes_processed;
+    assert_int_equal(aqs_linkage_set_auto(A, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(B, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK); /* adaptive first after set_auto */
+    assert_int_equal(aqs_linkage_solve(B), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(B), AQS_OK);
+    sa = stats_of(A);
+    sb = stats_of(B);
+    assert_int_equal(sa.auto_chosen, 1);
+    assert_int_equal(sb.auto_chosen, 1);
+    expect = ea * (COST_PROCESS + COST_AREFINE) - eb * COST_PROCESS;
+    print_message("refined: adaptive %.4g, unrefined %.4g (E %g / %g)\n", sa.cost_adaptive, sb.cost_adaptive, ea, eb);
+    assert_true(fabs((sa.cost_adaptive - sb.cost_adaptive) - expect) <= 1e-9 * sa.cost_adaptive);
+    assert_true(sa.cost_exact == sb.cost_exact);
+    aqs_linkage_destroy(A);
+    aqs_linkage_destroy(B);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -409,6 +457,7 @@ int main(void)
         cmocka_unit_test(test_off_and_on),
         cmocka_unit_test(test_fallback_first),
         cmocka_unit_test(test_caller_staleness_is_no_switch),
+        cmocka_unit_test(test_refinement_priced),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

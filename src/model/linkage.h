@@ -226,7 +226,8 @@ typedef struct {
     double rounding;        /* aqs_solve_stats.rounding_bound */
     double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */
     int certified;          /* aqs_solve_stats.certified */
-    int32_t arefined;       /* corrections of the computed joints the last adaptive solve kept (src/solve/refine.c) */
+    int32_t arefined;       /* corrections of the computed joints the last adaptive solve kept (src/solve/arefine.c) */
+    int arefine_useful;     /* ... and its first one was worth it (src/solve/adaptive.c refine_run) */
     int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
 
@@ -287,6 +288,8 @@ typedef struct {
     double proc;       /* internal nodes an adaptive solve processes: the last adaptive
                           solve's count, or the estimate from the last exact solve */
     double pred;       /* of which predicted (their factors skipped after a move) */
+    int refines;       /* the last adaptive solve refined its computed joints (src/solve/arefine.c):
+                          the next one is counted as refining too */
     double regret;     /* what adaptive steps would have saved over the exact solves the
                           model chose since the last adaptive one (instructions) */
     int32_t since;     /* exact solves since the last estimate from accelerations */
@@ -358,6 +361,8 @@ struct aqs_linkage {
     int fb_last;          /* the last solve was such an exact solve */
     double rfb_level;     /* aqs_linkage_set_rounding_fallback's level (0: off) */
     double arf_level;     /* aqs_linkage_set_adaptive_refinement's level (0: off) */
+    double arf_benign;    /* refinements are skipped up to this estimate (0: none; src/solve/adaptive.c) */
+    int32_t arf_skipped;  /* solves that skipped it since the last one that refined */
     int32_t rfb_left;     /* exact solves left in a rounding fallback's run */
     int rfb_last;         /* the last solve was exact because of the rounding fallback */
     aba_state aba;

@@ -2,6 +2,9 @@
  *
  * Costs, in instructions (src/solve/cost.h), of the next solve or step:
  *   adaptive = stale + E C_process [+ E (C_move + C_node) + (E - P) C_factor]
+ *              (+ E C_arefine when the last adaptive solve refined its
+ *              computed joints; C_node + C_keep once the linkage keeps load
+ *              factors)
  *   exact    = ne C_aba            [+ ne C_aba_move]
  * (brackets: a step's move and its update after the move). stale is the
  * recomputation of the nodes stale now: every node after exact steps, which
@@ -42,6 +45,7 @@ void autopath_reset(aqs_linkage *L)
     autopath_state *a = &L->ap;
     a->known = 0;
     a->proc = a->pred = a->regret = 0.0;
+    a->refines = 0;
     a->since = 0;
     a->own_stale = 0;
 }
@@ -55,7 +59,9 @@ int autopath_applies(const aqs_linkage *L)
 
 static double node_cost(const aqs_linkage *L)
 {
-    return L->dca_form == AQS_DCA_FORM_PHI ? COST_DCA_NODE_PHI : COST_DCA_NODE_SQRT;
+    if (L->dca_form == AQS_DCA_FORM_PHI) return COST_DCA_NODE_PHI;
+    /* a linkage that refined keeps every node update's load factors */
+    return COST_DCA_NODE_SQRT + (L->t.lf ? COST_KEEP_FACTORS : 0.0);
 }
 
 /* The model's costs (instructions) of the next solve, or step when stepping
@@ -80,7 +86,7 @@ static void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive,
             st += cn + (s->pred && s->pred[n] ? 0.0 : COST_FACTOR);
         }
     }
-    ad = st + E * COST_PROCESS;
+    ad = st + E * (COST_PROCESS + (L->ap.refines ? COST_AREFINE : 0.0));
     if (stepping) ad += E * (COST_MOVE + cn) + (E - P) * COST_FACTOR;
     *adaptive = ad;
     *exact = ne * (COST_ABA_JOINT + (stepping ? COST_ABA_MOVE : 0.0));
@@ -235,6 +241,7 @@ void autopath_after_solve(aqs_linkage *L, int32_t path, int chose)
     if (path == AQS_PATH_ADAPTIVE) {
         a->proc = (double)s->nprocessed;
         a->pred = (double)s->npred;
+        a->refines = s->arefine_useful; /* not a probe that was not worth it */
         a->regret = 0.0;
         a->since = 0;
         a->known = 1;

@@ -25,6 +25,14 @@
 #define COST_PROCESS 1260.0
 /* A node moved by an adaptive step: joint_integrate, frames_node. */
 #define COST_MOVE 490.0
+/* The refinement of an adaptive solve's computed joints (arefine_solve), per
+ * processed node, and what a node update adds once the linkage keeps its load
+ * factors (docs/math.md §13c). Not from tools/calibrate_cost.py: callgrind on
+ * `autocount_main adaptive 5000 N_f 20` with every solve refined, 2026-12-04
+ * (arefine_solve 4.4 k per processed node at N_f = 1, 5.8 k at N_f = 10; the
+ * node updates +36 M over 31,296, E^T E and the copies). */
+#define COST_AREFINE 5500.0
+#define COST_KEEP_FACTORS 1150.0
 /* The exact solve by the articulated-body algorithm (aba_solve), per
  * effective joint. */
 #define COST_ABA_JOINT 1520.0
