@@ -585,8 +585,7 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage,
  *  those joints (the skipped subtrees held by their coefficients) as their
  *  only load, each kept only when it lowers that residual, at most
  *  aqs_linkage_set_exact_refinement's count (0 turns both off; docs/math.md
- *  §13c). One whose first correction moved no joint by more than 64 u is
- *  skipped by the next 32 solves at an estimate within 8 times its own. It repairs the rounding of the computed joints' own assembly and
+ *  §13c). It repairs the rounding of the computed joints' own assembly and
  *  back-substitution, not that of a skipped subtree's coefficients. Only in
  *  the square-root DCA form and under the four joint measures; not when the
  *  rounding fallback answers the solve (it still sees the unrefined

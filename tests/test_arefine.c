@@ -264,9 +264,6 @@ static void test_joint_types(void **state)
                 int32_t refined;
                 assert_int_equal(aqs_linkage_set_tolerance(L, kMetrics[mi], ldexp(1.0, -e)), AQS_OK);
                 assert_int_equal(aqs_linkage_set_tolerance(X, kMetrics[mi], ldexp(1.0, -e)), AQS_OK);
-                /* setting the level forgets an earlier refinement that was not
-                 * worth it (refine_run's probe): every solve refines */
-                assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 1e-300), AQS_OK);
                 assert_int_equal(aqs_linkage_solve(L), AQS_OK);
                 assert_int_equal(aqs_linkage_solve(X), AQS_OK);
                 refined = L->s.arefined;
@@ -446,56 +443,6 @@ static void test_continue_and_fallback(void **state)
     aqs_linkage_destroy(A);
 }
 
-/* A refinement that was not worth it (its first correction below 64 u, on a
- * benign random tree refined at every estimate: level 1e-300) is skipped by
- * the next 32 solves at a similar estimate and tried again at the 33rd;
- * setting the level forgets it. (test_moving: light distal links, where it
- * is worth it, refine at every solve.) */
-static void test_probe(void **state)
-{
-    uint64_t rng = 4242;
-    int k, found = 0;
-    (void)state;
-    for (k = 0; k < 20 && !found; k++) {
-        test_tree_spec sp;
-        aqs_linkage *L;
-        int i;
-        memset(&sp, 0, sizeof sp);
-        sp.nbodies = 60;
-        sp.gravity = 1;
-        sp.nforces = 4;
-        sp.mass_spread = 4.0;
-        L = test_random_tree(&rng, &sp);
-        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-        assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
-        assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 1e-300), AQS_OK);
-        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_LINKAGE, 0.01), AQS_OK);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        if (L->s.arefined == 0 || !(L->arf_benign > 0.0)) {
-            aqs_linkage_destroy(L);
-            continue;
-        }
-        found = 1;
-        assert_int_equal(L->s.arefine_useful, 0);
-        for (i = 0; i < 32; i++) {
-            assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-            assert_true(L->s.rounding_rel <= L->arf_benign);
-            assert_int_equal(L->s.arefined, 0);
-        }
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the probe */
-        assert_int_equal(L->arf_skipped, 0);
-        assert_true(L->s.arefined >= 1);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_int_equal(L->s.arefined, 0);
-        assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 1e-300), AQS_OK);
-        assert_true(L->arf_benign == 0.0);
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_true(L->s.arefined >= 1);
-        aqs_linkage_destroy(L);
-    }
-    assert_true(found);
-}
-
 /* aqs_linkage_set_adaptive_refinement: the default, 0 off, negative and
  * non-finite levels refused with nothing changed, NULL refused. */
 static void test_setting(void **state)
@@ -580,7 +527,7 @@ int main(void)
         cmocka_unit_test(test_hard_families), cmocka_unit_test(test_joint_types),
         cmocka_unit_test(test_state_restored), cmocka_unit_test(test_moving),
         cmocka_unit_test(test_setting),        cmocka_unit_test(test_out_of_memory),
-        cmocka_unit_test(test_continue_and_fallback), cmocka_unit_test(test_probe),
+        cmocka_unit_test(test_continue_and_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

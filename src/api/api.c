@@ -1087,8 +1087,6 @@ AQS_API aqs_status aqs_linkage_set_adaptive_refinement(aqs_linkage *L, double le
     if (!isfinite(level) || level < 0.0)
         return lk_fail(L, AQS_EINVAL, "%s: level = %g must be finite and >= 0", fn, level);
     L->arf_level = level;
-    L->arf_benign = 0.0; /* what earlier refinements found is forgotten */
-    L->arf_skipped = 0;
     return AQS_OK;
 }
 

@@ -227,7 +227,6 @@ typedef struct {
     double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */
     int certified;          /* aqs_solve_stats.certified */
     int32_t arefined;       /* corrections of the computed joints the last adaptive solve kept (src/solve/arefine.c) */
-    int arefine_useful;     /* ... and its first one was worth it (src/solve/adaptive.c refine_run) */
     int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
 } solve_state;
 
@@ -361,8 +360,6 @@ struct aqs_linkage {
     int fb_last;          /* the last solve was such an exact solve */
     double rfb_level;     /* aqs_linkage_set_rounding_fallback's level (0: off) */
     double arf_level;     /* aqs_linkage_set_adaptive_refinement's level (0: off) */
-    double arf_benign;    /* refinements are skipped up to this estimate (0: none; src/solve/adaptive.c) */
-    int32_t arf_skipped;  /* solves that skipped it since the last one that refined */
     int32_t rfb_left;     /* exact solves left in a rounding fallback's run */
     int rfb_last;         /* the last solve was exact because of the rounding fallback */
     aba_state aba;

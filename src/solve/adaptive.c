@@ -366,23 +366,14 @@ static void requeue(aqs_linkage *L, heap *h)
     resum(L, h);
 }
 
-/* A refinement whose first correction was not worth it (arefine_solve's
- * small) is not tried again while the estimate stays within AREFINE_SPAN times
- * the one it had, but once every AREFINE_REPROBE + 1 solves (a benign linkage
- * whose estimate is above the level, e.g. long lever arms: docs/math.md §13c). */
-#define AREFINE_SPAN 8.0
-#define AREFINE_REPROBE 32
-
 /* The stopping measure's rounding estimate, then the computed joints refined
  * where it says they lose digits (docs/math.md §13c), and the run continued
  * if their new handle forces raised the bound. */
 static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
 {
     solve_state *s = &L->s;
-    int small;
     rounding_finish(L);
     s->arefined = 0;
-    s->arefine_useful = 0;
     if (!(L->arf_level > 0.0) || s->metric >= AQS_METRIC_ABS_WORLD || s->all || s->nprocessed == 0 ||
         L->dca_form != AQS_DCA_FORM_SQRT || !(s->rounding_rel > L->arf_level))
         return;
@@ -393,16 +384,7 @@ static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
     if (from_solve && (h->size == 0 || (L->rfb_level > 0.0 && s->max_computed == 0 &&
                                         !(s->rounding_rel <= L->rfb_level))))
         return;
-    /* a refinement that was not worth it at an estimate up to AREFINE_SPAN
-     * times this one: skipped, but for a probe every AREFINE_REPROBE solves */
-    if (from_solve && L->arf_benign > 0.0 && s->rounding_rel <= L->arf_benign && L->arf_skipped < AREFINE_REPROBE) {
-        L->arf_skipped++;
-        return;
-    }
-    s->arefined = arefine_solve(L, &small);
-    L->arf_skipped = 0;
-    L->arf_benign = small ? AREFINE_SPAN * s->rounding_rel : 0.0;
-    s->arefine_useful = s->arefined > 0 && !small;
+    s->arefined = arefine_solve(L);
     if (s->arefined == 0) return;
     requeue(L, h);
     run(L, h, eps);

@@ -307,13 +307,12 @@ static int arefine_alloc(aqs_linkage *L)
     return 0;
 }
 
-int32_t arefine_solve(aqs_linkage *L, int *small)
+int32_t arefine_solve(aqs_linkage *L)
 {
     const solve_state *s = &L->s;
     struct arefine *R;
     double rn, qmax;
     int32_t i, it, kept = 0;
-    *small = 0;
     if (s->nprocessed == 0 || L->refine_max <= 0 || L->dca_form != AQS_DCA_FORM_SQRT) return 0;
     if (arefine_alloc(L) != 0) return 0; /* out of memory: the answer as it is */
     R = L->arf;
@@ -332,13 +331,11 @@ int32_t arefine_solve(aqs_linkage *L, int *small)
                  * to evaluate), and none follows */
                 save_x(L);
                 kept++;
-                *small = it == 0;
                 break;
             }
             rn1 = adaptive_residual(L);
             if (!(rn1 >= 0.0 && rn1 < rn)) { /* not lower: the answer as it was */
                 apply_adaptive(L, 0, &qmax);
-                *small = it == 0;
                 break;
             }
             save_x(L);

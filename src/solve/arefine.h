@@ -13,10 +13,8 @@
  * children (the queued nodes' included), each kept only when it lowers the
  * reduced system's residual. The stored b, rho, gamma and rounding levels are
  * the solve's again on return. Returns the corrections kept (0: nothing
- * changed; also when out of memory, and the next call tries again); *small
- * is 1 when the first correction was not worth it (it moved no joint by
- * more than 64 u of the largest, or did not lower the residual). */
-int32_t arefine_solve(aqs_linkage *L, int *small);
+ * changed; also when out of memory, and the next call tries again). */
+int32_t arefine_solve(aqs_linkage *L);
 void arefine_free(aqs_linkage *L);
 
 #endif

@@ -241,7 +241,7 @@ void autopath_after_solve(aqs_linkage *L, int32_t path, int chose)
     if (path == AQS_PATH_ADAPTIVE) {
         a->proc = (double)s->nprocessed;
         a->pred = (double)s->npred;
-        a->refines = s->arefine_useful; /* not a probe that was not worth it */
+        a->refines = s->arefined > 0;
         a->regret = 0.0;
         a->since = 0;
         a->known = 1;
