@@ -7,6 +7,11 @@
   bound at all (the bound is for exact arithmetic, so rounding alone does it) | solves that
   exceed it by more than the rounding allowance (the check hardcases asserts)
 
+then one row per family for the adaptive solves' computed joints (`comp`, their own error in
+the solve's measure, against 10x the ABA's error, the allowance / 10), over the solves that
+skipped joints and were not answered by the rounding fallback: solves, how many are above
+10x, the largest ratio (docs/hardcases.md, "The adaptive solves' computed joints refined");
+
 then, from the bound-truth sweep's records ("solver": "bound"), one row per family: solves,
 how many error_bound alone put below the truth, not certified, certified bounds below the
 truth (asserted 0), tightness (error_bound + rounding_bound) / true over the certified solves,
@@ -71,6 +76,20 @@ def main(path):
             name, row["dofs"], fmt(aba["rel2"]), dcs, " | ".join(cols),
             "%d / %d" % (exceeded, total) if total else "-",
             "%d / %d" % (beyond, total) if total else "-"))
+    comp = {}
+    for name in order:
+        for m in METRICS:
+            for r in rows[name].get("adaptive", {}).get(m, []):
+                if (r["status"] != 0 or r.get("path", 0) != 0 or r.get("comp") is None
+                        or r["computed"] >= r["counted"] or not r.get("allowance")):
+                    continue
+                comp.setdefault(r["family"], []).append(r["comp"] / (r["allowance"] / 10.0))
+    if comp:
+        print()
+        print("| family | adaptive solves that skipped joints | computed joints above 10x the ABA's error | largest ratio |")
+        print("|---|---:|---:|---:|")
+        for fam, v in comp.items():
+            print("| %s | %d | %d | %s |" % (fam, len(v), sum(1 for x in v if x > 10.0), fmt(max(v))))
     if bound:
         print()
         print("| family | solves | error_bound alone below the truth | not certified | "
