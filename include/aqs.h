@@ -925,15 +925,21 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  up computing every joint: error_bound 0), at most max_corrections
  *  GMRES cycles on M dq = Q - ID(qdd) preconditioned by the DCA itself,
  *  each kept only when its answer is finite and lowers the inverse-dynamics
- *  residual (or converged and both residuals are at its rounding floor); the constraint forces are then those of the refined
- *  accelerations. A cycle's first step is the plain correction
+ *  residual (or converged and both residuals are at its rounding floor). The
+ *  constraint forces and accelerations are refined first by the DCA's own
+ *  residual (across each joint, the bodies' relative acceleration against
+ *  S qdd, and Q - S^T f: docs/math.md 13a, "The joint forces of a refined
+ *  solve"); the forces are then that refinement's, or the inverse dynamics'
+ *  of the refined accelerations where their estimated error is at the
+ *  rounding level. A cycle's first step is the plain correction
  *  qdd += DCA^-1(Q - ID(qdd)), about one more pass over the tree's nodes,
  *  and where it is resolved (the usual case) the cycle ends there; otherwise
  *  up to 128 steps of one such pass each (a further cycle when the last one's
  *  true residual ended far above GMRES's estimate). max_corrections: 0 (off: the DCA's
  *  back-substitution as it is, the paper's exact solver) to
  *  AQS_REFINEMENT_MAX; default AQS_REFINEMENT_MAX. Any phase; takes effect
- *  at the next solve. The refinement's arrays (~525 B per joint, and 328 B
+ *  at the next solve. The refinement's arrays (~1,800 B per joint with the
+ *  nodes' load factors, which node updates keep from then on, and 328 B
  *  for the Krylov basis when GMRES needs it, 2,056 B when a cycle needs more
  *  than 20 steps) are allocated at the first
  *  solve that refines: the only allocation a solve makes; if it fails, that

@@ -161,8 +161,11 @@ static void aba_then_dca(aqs_linkage *L, int32_t nv, int32_t nj, double *qa, dou
 
 /* The ABA against the refined exact DCA on L (aba_then_dca), then destroyed:
  * at least min_steps correction steps, accelerations within 1e-14 of the
- * ABA's (relative 2-norm), joint forces within ftol. */
-static void refined_vs_aba(aqs_linkage *L, const char *what, int32_t min_steps, double ftol)
+ * ABA's (relative 2-norm), joint forces within ftol. gmres_only: without the
+ * joint forces' first refinement (L->refine_forces 0: GMRES alone, as where
+ * that refinement cannot allocate its arrays, and in the inverse-inertia
+ * form). */
+static void refined_vs_aba(aqs_linkage *L, const char *what, int32_t min_steps, double ftol, int gmres_only)
 {
     int32_t nv, nj;
     double *qa, *qd, *fa, *fd;
@@ -172,8 +175,10 @@ static void refined_vs_aba(aqs_linkage *L, const char *what, int32_t min_steps, 
     fa = calloc(6 * (size_t)nj, sizeof *fa);
     fd = calloc(6 * (size_t)nj, sizeof *fd);
     assert_non_null(qa && qd && fa && fd);
+    L->refine_forces = !gmres_only;
     aba_then_dca(L, nv, nj, qa, fa, qd, fd);
-    print_message("%s: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", what, test_rel_diff(qd, qa, (size_t)nv),
+    print_message("%s%s: refined DCA vs ABA %.2e (%d steps), forces %.2e\n", what, gmres_only ? " (GMRES alone)" : "",
+                  test_rel_diff(qd, qa, (size_t)nv),
                   (int)L->s.refined, test_rel_diff(fd, fa, 6 * (size_t)nj));
     assert_true(L->s.refined >= min_steps);
     assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-14);
@@ -205,11 +210,13 @@ static void test_altmass(void **state)
         aba_then_dca(L, nv, nj, qa, fa, qd, fd);
         assert_true(L->s.refined >= 1);
         assert_true(test_rel_diff(qd, qa, (size_t)nv) <= 1e-13);
-        /* forces (welded bodies' fixed joints included): the inverse dynamics'
-         * of the refined answer against the ABA's. Measured 1.6e-11 relative
-         * (seed 1); no extended-precision reference of the forces here, so
-         * this only says the two double answers agree that far. */
-        assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 1e-10);
+        /* forces (welded bodies' fixed joints included) against the ABA's:
+         * refined first by the DCA's own residual (docs/math.md §13a, "The
+         * joint forces of a refined solve"); both are within 1e-15 of the
+         * __float128 reference's on this family (hardcases, unwelded), so
+         * 1e-14. Measured 3.8e-16 .. 7.0e-16 (the inverse dynamics' forces of the refined
+         * answer, taken before 2026-12-04, were 1.6e-11 from them, seed 1). */
+        assert_true(test_rel_diff(fd, fa, 6 * (size_t)nj) <= 1e-14);
         /* an adaptive solve that computes every joint (here through a cap of
          * every joint) is refined the same way */
         assert_int_equal(aqs_linkage_set_max_computed(L, nj + 1), AQS_OK);
@@ -298,11 +305,16 @@ static void test_altmass_gmres(void **state)
     for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         char what[64];
         snprintf(what, sizeof what, "altmass 1e9 n=%d seed %d", cases[c].n, (int)cases[c].seed);
-        /* forces: the inverse dynamics' of the refined answer against the
-         * ABA's, measured 7.8e-12 .. 2.6e-11 at 100 links, 1.8e-9 at 1000 (the
-         * base carries 5e2 bodies of 1e9 kg); no extended-precision reference
-         * of the forces, so this only says the two double answers agree. */
-        refined_vs_aba(altmass(cases[c].n, 1e9, c == 1, cases[c].seed), what, 2, 1e-8);
+        /* GMRES alone: forces the unrefined back-substitution's (the inverse
+         * dynamics' of the refined answer were 7.8e-12 .. 2.6e-11 from the
+         * ABA's at 100 links, 1.8e-9 at 1000; docs/math.md §13a, "The joint
+         * forces of a refined solve"), measured 1.1e-13 .. 2.7e-13 (9 .. 36
+         * GMRES steps). With the forces refined first (the default): the forces
+         * within 1e-14 of the ABA's (both within 1e-15 of the __float128
+         * reference's on this family, hardcases), measured 3.3e-16 .. 8.0e-16,
+         * 2 .. 3 correction solves in all. */
+        refined_vs_aba(altmass(cases[c].n, 1e9, c == 1, cases[c].seed), what, 2, 1e-12, 1);
+        refined_vs_aba(altmass(cases[c].n, 1e9, c == 1, cases[c].seed), what, 1, 1e-14, 0);
     }
 }
 
@@ -324,10 +336,12 @@ static void test_altmass_restart(void **state)
     for (seed = 1; seed <= 3; seed++) {
         char what[64];
         snprintf(what, sizeof what, "altmass 1e9 n=2000 seed %d", seed);
-        /* forces: as test_altmass_gmres (the two double answers agree; no
-         * extended-precision reference of the forces), measured 2.2e-8 .. 2.9e-8
-         * (1.8e-9 .. 2.9e-9 at 1,000 links: they grow with the chain's load) */
-        refined_vs_aba(altmass(2000, 1e9, seed == 2, (uint64_t)seed), what, 21, 2e-7);
+        /* forces: as test_altmass_gmres; GMRES alone (the inverse dynamics'
+         * forces were 2.2e-8 .. 2.9e-8 from the ABA's), measured 1.1e-13 ..
+         * 2.7e-13; refined first, 3.5e-16 .. 5.3e-16 (2 .. 3 correction
+         * solves in all, against 55 .. 59 GMRES steps alone) */
+        refined_vs_aba(altmass(2000, 1e9, seed == 2, (uint64_t)seed), what, 21, 1e-12, 1);
+        refined_vs_aba(altmass(2000, 1e9, seed == 2, (uint64_t)seed), what, 1, 1e-14, 0);
     }
 }
 

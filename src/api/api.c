@@ -134,6 +134,7 @@ AQS_API aqs_status aqs_linkage_create_with_allocator(aqs_alloc_fn alloc, aqs_fre
     L->t.root = -1;
     autopath_init(L);
     L->refine_max = AQS_REFINEMENT_MAX;
+    L->refine_forces = 1;
     L->rfb_level = AQS_ROUNDING_FALLBACK_LEVEL;
     L->arf_level = AQS_ADAPTIVE_REFINEMENT_LEVEL;
     *out = L;

@@ -227,7 +227,8 @@ typedef struct {
     double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */
     int certified;          /* aqs_solve_stats.certified */
     int32_t arefined;       /* corrections of the computed joints the last adaptive solve kept (src/solve/arefine.c) */
-    int32_t refined;        /* correction solves (GMRES steps) the last exact DCA solve kept (src/solve/refine.c) */
+    int32_t refined;        /* correction solves the last exact DCA solve kept (src/solve/refine.c): the joint
+                               forces' first refinement's and GMRES steps */
 } solve_state;
 
 /* The exact solve by the articulated-body algorithm (src/solve/aba.c). Its data
@@ -353,6 +354,8 @@ struct aqs_linkage {
     solve_state s;
     int32_t exact_solver; /* AQS_EXACT_* */
     int32_t refine_max;   /* corrections of an exact DCA solve (aqs_linkage_set_exact_refinement) */
+    int32_t refine_forces; /* 1 (set at create): the exact refinement refines the joint forces first
+                              (src/solve/refine.c, FORCES); 0 only in tests, for GMRES alone */
     int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */

@@ -384,7 +384,7 @@ static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
     if (from_solve && (h->size == 0 || (L->rfb_level > 0.0 && s->max_computed == 0 &&
                                         !(s->rounding_rel <= L->rfb_level))))
         return;
-    s->arefined = arefine_solve(L);
+    s->arefined = arefine_solve(L, NULL);
     if (s->arefined == 0) return;
     requeue(L, h);
     run(L, h, eps);

@@ -23,8 +23,9 @@
 #include "dca.h"
 #include "rounding.h"
 
-/* A correction that moved no computed joint by more than this many u
- * (relative, max norms) ends the refinement. */
+/* A correction that moved no computed joint's acceleration, and no joint
+ * force, by more than this many u (relative, max norms) ends the refinement:
+ * it converged. */
 #define AREFINE_LEVEL 64.0
 
 struct arefine {
@@ -213,13 +214,14 @@ static int adaptive_correction(aqs_linkage *L)
 
 /* Apply (dir 1) or take back (dir 0) the correction in R->dq, R->df to the
  * computed joints (R->q1, R->cf hold what they were). Returns the largest
- * change and sets *qmax to the largest |qdd| after (max norms). */
-static double apply_adaptive(aqs_linkage *L, int dir, double *qmax)
+ * change and sets *qmax to the largest |qdd| after, *fstep to the largest
+ * change of a joint force over the largest joint force after (max norms). */
+static double apply_adaptive(aqs_linkage *L, int dir, double *qmax, double *fstep)
 {
     const tree *t = &L->t;
     struct arefine *R = L->arf;
     const solve_state *s = &L->s;
-    double dmax = 0.0, m = 0.0;
+    double dmax = 0.0, m = 0.0, fd = 0.0, fm = 0.0;
     int32_t i, c;
     for (i = 0; i < s->nprocessed; i++) {
         const int32_t j = L->m.eff_joint[t->nodes[s->processed[i]].joint];
@@ -239,12 +241,15 @@ static double apply_adaptive(aqs_linkage *L, int dir, double *qmax)
             if (dir) {
                 R->cf[6 * i + c] = f[c];
                 f[c] += R->df[6 * j + c];
+                fd = fmax(fd, fabs(R->df[6 * j + c]));
             } else {
                 f[c] = R->cf[6 * i + c];
             }
+            fm = fmax(fm, fabs(f[c]));
         }
     }
     *qmax = m;
+    *fstep = fm > 0.0 ? fd / fm : 0.0;
     return dmax;
 }
 
@@ -307,12 +312,13 @@ static int arefine_alloc(aqs_linkage *L)
     return 0;
 }
 
-int32_t arefine_solve(aqs_linkage *L)
+int32_t arefine_solve(aqs_linkage *L, int *converged)
 {
     const solve_state *s = &L->s;
     struct arefine *R;
     double rn, qmax;
     int32_t i, it, kept = 0;
+    double last_fstep = INFINITY; /* the last correction's force step (relative) */
     if (s->nprocessed == 0 || L->refine_max <= 0 || L->dca_form != AQS_DCA_FORM_SQRT) return 0;
     if (arefine_alloc(L) != 0) return 0; /* out of memory: the answer as it is */
     R = L->arf;
@@ -321,12 +327,13 @@ int32_t arefine_solve(aqs_linkage *L)
     if (rn > 0.0) {
         save_adaptive(L, 0, 1);
         for (it = 0; it < L->refine_max; it++) {
-            double rn1, dmax;
+            double rn1, dmax, fstep;
             if (adaptive_correction(L) != 0) break;
             add_x(L);
             save_adaptive(L, 1, 0); /* the solve's b, rho, gamma and levels back, for the residual */
-            dmax = apply_adaptive(L, 1, &qmax);
-            if (dmax <= AREFINE_LEVEL * RND_U * qmax) {
+            dmax = apply_adaptive(L, 1, &qmax, &fstep);
+            last_fstep = fstep;
+            if (dmax <= AREFINE_LEVEL * RND_U * qmax && fstep <= AREFINE_LEVEL * RND_U) {
                 /* resolved: a step this small is kept as it is (no residual
                  * to evaluate), and none follows */
                 save_x(L);
@@ -335,16 +342,22 @@ int32_t arefine_solve(aqs_linkage *L)
             }
             rn1 = adaptive_residual(L);
             if (!(rn1 >= 0.0 && rn1 < rn)) { /* not lower: the answer as it was */
-                apply_adaptive(L, 0, &qmax);
+                apply_adaptive(L, 0, &qmax, &fstep);
                 break;
             }
             save_x(L);
             kept++;
             rn = rn1;
-            if (rn == 0.0) break;
+            if (rn == 0.0) {
+                last_fstep = 0.0;
+                break;
+            }
         }
         save_adaptive(L, 1, 1); /* b, rho, gamma, levels as the solve left them; x the kept one */
     }
     for (i = 0; i < s->nprocessed; i++) R->inp[s->processed[i]] = 0;
+    /* the forces converged: the last correction, kept or not, moved them by
+     * at most AREFINE_LEVEL u (or the residual reached 0) */
+    if (converged) *converged = last_fstep <= AREFINE_LEVEL * RND_U;
     return kept;
 }

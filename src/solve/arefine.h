@@ -7,14 +7,20 @@
 
 #include "linkage.h"
 
-/* After an adaptive solve (square-root form, the coefficients current): up
+/* After an adaptive solve (square-root form, the coefficients current; also
+ * one that processed every node, for the exact refinement's joint forces,
+ * src/solve/refine.c): up
  * to L->refine_max corrections of the computed joints' accelerations,
  * constraint forces and the handle forces of the processed nodes and their
  * children (the queued nodes' included), each kept only when it lowers the
- * reduced system's residual. The stored b, rho, gamma and rounding levels are
- * the solve's again on return. Returns the corrections kept (0: nothing
- * changed; also when out of memory, and the next call tries again). */
-int32_t arefine_solve(aqs_linkage *L);
+ * reduced system's residual; the joint forces have converged (*converged
+ * set to 1, when converged is not NULL) when the last correction, kept or
+ * not, moved none by more than 64 u of the largest, or the residual reached
+ * 0. The stored b,
+ * rho, gamma and rounding levels are the solve's again on return. Returns the
+ * corrections kept (0: nothing changed; also when out of memory, and the next
+ * call tries again). */
+int32_t arefine_solve(aqs_linkage *L, int *converged);
 void arefine_free(aqs_linkage *L);
 
 #endif

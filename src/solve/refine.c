@@ -17,17 +17,22 @@
  * another from the true residual; one that converged is kept where the
  * residual is at its rounding floor and cannot tell (FLOOR_FACTOR).
  *
- * The correction reruns the node update (dca_node_update: Lambda, FX, QX come
- * out bit for bit the same, the positions being unchanged; rho, gamma and b
- * with the residual as the load) and the back-substitution into scratch; the
- * unrefined solve's load-dependent values are saved first and put back at
- * the end, so the lazy update's next solve finds them as they were. */
+ * The correction recomputes the nodes' load-dependent values (rho, gamma
+ * and b) with the residual as the load: by the loads-only pass
+ * (dca_node_loads) from the load factors the node updates keep once
+ * arefine_solve enabled them, else by the node update (dca_node_update:
+ * Lambda, FX, QX come out bit for bit the same, the positions being
+ * unchanged); then the back-substitution into scratch. The unrefined solve's
+ * load-dependent values are saved first and put back at the end, so the
+ * lazy update's next solve finds them as they were. The joint forces are
+ * refined first, by the DCA's own residual (FORCES below). */
 #include "refine.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "aba.h"
+#include "arefine.h"
 #include "dca.h"
 #include "residual.h"
 
@@ -38,6 +43,14 @@
  * each, measured, not by the DCA's relative error level). At most
  * L->refine_max cycles (aqs_linkage_set_exact_refinement). */
 #define REFINE_LEVEL 1024.0
+/* A first cycle's plain correction is formed by the loads-only pass where
+ * the nodes keep their load factors (dca_node_loads: W = E^T E, not E, so its
+ * relative error is about the square of the node update's): taken as it is
+ * only when it moved the answer by at most LOADS_LEVEL u (relative, max
+ * norms: the molecule of 2,000 joints 2.1 .. 2.7 u), else formed again by
+ * the node update (the masses alternating by 1e9: 1.5e8 u, against 80 u
+ * for the node update's). */
+#define LOADS_LEVEL 64.0
 #define REFINE_LEVEL_LATER 64.0
 /* Krylov steps of one GMRES cycle at most (each one correction solve, one
  * node pass): altmass r = 1e9 at 1000 links takes 18, at 10^4 links 103
@@ -69,6 +82,28 @@
  * errors 1.2e-12 and 8e-16). 4 rejected such a cycle at 2,000 links (1,765
  * against a floor of 439). */
 #define FLOOR_FACTOR 16.0
+/* FORCES. The joint forces of a refined solve. The inverse dynamics' forces
+ * of the refined accelerations carry their error amplified (id_force_error):
+ * on a 2,000-link chain falling under gravity 1.3e-7 of the largest, against
+ * 2.9e-16 for the back-substitution's forces, which do not pass through the
+ * accelerations. Those are refined first, with the accelerations, by the
+ * DCA's own residual (src/solve/arefine.c with every node processed: across
+ * each joint, the bodies' relative acceleration from their handle forces
+ * against S qdd, and Q - S^T f), which brings them within 1.7x of the
+ * articulated-body solver's forces against a __float128 reference on every
+ * hard-case family (docs/hardcases.md); then GMRES refines the accelerations
+ * alone. That first refinement is kept only if it converged (its last
+ * correction moved nothing by more than 64 u): on the tilted chain of 10^5
+ * links its residual is rounding (bodies between large, nearly balancing
+ * handle forces), its corrections move the forces by 4e4 u, 2.8e4 u, ...,
+ * and taking them left the forces at 4.5e-12 where the back-substitution's
+ * are 1.9e-15. The inverse dynamics' forces replace them only where their
+ * estimated error is at most ID_FORCE_LEVEL u (near equilibrium, where the
+ * accelerations are small: 1e-20 there, 5.6e-16 on the 6-link point-mass
+ * chains). In the inverse-inertia form (no arefine_solve) they always do:
+ * its back-substitution's forces are worse still (3.1e-3 on the oblique
+ * chain of 2,000 links). */
+#define ID_FORCE_LEVEL 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -196,7 +231,7 @@ static void save_loads(aqs_linkage *L, int dir)
 /* dq = DCA^-1(r): every leaf's b zero (no gravity, no load), the node update
  * with r as the joint forces, the back-substitution into R's scratch.
  * Returns 0, or -1 when a node update fails (r not finite). */
-static int correction(aqs_linkage *L, double *r)
+static int correction(aqs_linkage *L, double *r, int loads_only)
 {
     tree *t = &L->t;
     struct refine *R = L->rf;
@@ -208,7 +243,8 @@ static int correction(aqs_linkage *L, double *r)
     }
     L->tau = r;
     for (n = 0; n < t->nnodes && !fail; n++) /* children first */
-        if (t->nodes[n].joint >= 0 && dca_node_update(L, n) != 0) fail = 1;
+        if (t->nodes[n].joint >= 0 && (!loads_only || dca_node_loads(L, n) != 0) && dca_node_update(L, n) != 0)
+            fail = 1;
     L->tau = tau;
     if (fail) return -1;
     memset(t->data + nd_xf(&t->nodes[t->root]), 0, 6 * (size_t)t->nodes[t->root].nh * sizeof(double));
@@ -275,13 +311,24 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
             /* the plain correction P r first: where it is resolved, it is
              * the answer (plain refinement, bit for bit, no Arnoldi step;
              * also when the basis cannot be allocated) */
-            if (correction(L, R->r) != 0) break;
-            for (i = 0; i < nv; i++) {
-                R->q1[i] = L->qdd[i] + R->dq[i];
-                dmax = fmax(dmax, fabs(R->dq[i]));
-                qmax = fmax(qmax, fabs(R->q1[i]));
+            int loads = cycle == 0 && L->t.lf != NULL, rs = 0, bad = 0;
+            for (;;) {
+                if (correction(L, R->r, loads) != 0) {
+                    bad = 1;
+                    break;
+                }
+                dmax = qmax = 0.0;
+                for (i = 0; i < nv; i++) {
+                    R->q1[i] = L->qdd[i] + R->dq[i];
+                    dmax = fmax(dmax, fabs(R->dq[i]));
+                    qmax = fmax(qmax, fabs(R->q1[i]));
+                }
+                rs = cycle == 0 && dmax <= (loads ? LOADS_LEVEL : REFINE_LEVEL) * 1.1102230246251565e-16 * qmax;
+                if (rs || !loads) break;
+                loads = 0; /* the loads-only correction not resolved: the full one instead */
             }
-            if ((cycle == 0 && resolved(dmax, qmax, 0)) || krylov_alloc(L, KRYLOV_FIRST) != 0) {
+            if (bad) break;
+            if (rs || krylov_alloc(L, KRYLOV_FIRST) != 0) {
                 *done = 1;
                 return 1;
             }
@@ -295,7 +342,7 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
                 zj[i] = R->dq[i] / rn;
             }
         } else {
-            if (correction(L, vj) != 0) break;
+            if (correction(L, vj, 0) != 0) break;
             memcpy(zj, R->dq, sizeof(double) * (size_t)nv);
         }
         residual_mass_mul(L, zj, w);
@@ -374,16 +421,60 @@ static double rounding_floor(aqs_linkage *L, const double *q)
     return sqrt(f);
 }
 
+/* The inverse dynamics' joint forces of the refined accelerations carry
+ * their error amplified: f_j sums I_i a_i over the subtree, a_i sums S qdd_k
+ * over the path, and where the accelerations are large and cancel in a_i (a
+ * long chain falling) an error of u |qdd| per joint becomes u |M qdd| in the
+ * forces (2,000-link chain under gravity: 1.3e-7 of the largest, the
+ * back-substitution's forces 2.9e-16). Their error estimated as the forces
+ * of qdd perturbed by d_i = +-u |qdd_i| (signs as in rounding_floor), max
+ * norm relative to the largest joint force in L->cforce (the
+ * back-substitution's, refined); R->dq and R->df are scratch. */
+static double id_force_error(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    const aba_state *a = &L->aba;
+    double fm = 0.0, em = 0.0;
+    int32_t k, i;
+    (void)rounding_floor(L, L->qdd);
+    residual_forces(L, R->df);
+    for (k = 0; k < L->m.ne; k++) {
+        const double *f = L->cforce + 6 * (size_t)a->joint[k].joint, *e = R->df + 6 * (size_t)a->joint[k].joint;
+        for (i = 0; i < 6; i++) {
+            fm = fmax(fm, fabs(f[i]));
+            em = fmax(em, fabs(e[i]));
+        }
+    }
+    return fm > 0.0 ? em / fm : (em > 0.0 ? INFINITY : 0.0);
+}
+
 void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
     double rn, *tmp, rfloor = -1.0;
-    int32_t cycle, nv = L->nv, kept = 0, current = 1;
+    int32_t cycle, nv = L->nv, kept = 0, akept = 0;
     int done = 0;
     L->s.refined = 0;
     if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return;
     if (refine_alloc(L) != 0) return; /* out of memory: the answer as it is */
     R = L->rf;
+    /* the joint forces (and the accelerations with them) by the DCA's own
+     * residual first, kept only if that refinement converged (R->q1 and R->df,
+     * not used yet, hold the unrefined answer meanwhile): see FORCES above */
+    if (L->refine_forces) {
+        int conv = 0;
+        memcpy(R->q1, L->qdd, sizeof(double) * (size_t)nv);
+        memcpy(R->df, L->cforce, 6 * sizeof(double) * (size_t)L->njoints);
+        akept = arefine_solve(L, &conv);
+        if (akept > 0 && !conv) {
+            memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
+            memcpy(L->cforce, R->df, 6 * sizeof(double) * (size_t)L->njoints);
+            akept = 0;
+        } else if (akept > 0 && L->m.nwelded > 0) {
+            aba_welded_forces(L);
+        }
+    }
+    L->s.refined = akept;
     residual_poses(L);
     rn = residual_eval(L, L->qdd, R->r);
     if (!isfinite(rn) || rn == 0.0) return;
@@ -394,7 +485,6 @@ void refine_exact(aqs_linkage *L)
         const int32_t k = gmres_cycle(L, rn, cycle, &done, &est, &sum);
         if (k == 0) break;
         rn1 = residual_eval(L, R->q1, R->r2); /* the true residual */
-        current = 0;
         if (!isfinite(rn1)) break; /* a non-finite candidate's residual is not finite */
         if (k > 1 && done && !(rn1 < rn) && est <= LATER_DROP * rn) {
             /* a converged Krylov cycle that did not lower the residual: kept
@@ -411,18 +501,19 @@ void refine_exact(aqs_linkage *L)
         memcpy(L->qdd, R->q1, sizeof(double) * (size_t)nv);
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
-        current = 1;
         kept += k;
         if (rn == 0.0) break;
     }
     save_loads(L, 1);
-    if (kept) {
-        /* the joint forces of the refined accelerations: the last residual's
-         * when it was the kept one */
-        if (!current || rfloor >= 0.0) (void)residual_eval(L, L->qdd, R->r2); /* rounding_floor overwrote its scratch */
+    if (kept && (L->dca_form != AQS_DCA_FORM_SQRT || id_force_error(L) <= ID_FORCE_LEVEL * 1.1102230246251565e-16)) {
+        /* the inverse dynamics' joint forces of the refined accelerations,
+         * where their error is at the rounding level, or in the
+         * inverse-inertia form, whose back-substitution's forces are not
+         * refined (FORCES above) */
+        (void)residual_eval(L, L->qdd, R->r2);
         residual_forces(L, L->cforce);
         if (L->m.nwelded > 0) aba_welded_forces(L);
     }
-    L->s.refined = kept;
+    L->s.refined = akept + kept;
 }
 

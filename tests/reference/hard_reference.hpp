@@ -431,6 +431,11 @@ inline Order make_order(const ModelData &m) {
 template <class T> struct Result {
     std::vector<T> qdd;   // nv
     std::vector<T> tau0;  // the generalized force that makes qdd = 0 (if asked)
+    // Per joint, the spatial force it exerts on its child, in the child's body frame about its
+    // origin, torque first (aqs_linkage_get_constraint_forces' convention): Newton-Euler on the
+    // child's subtree, f_j = sum over the subtree of (I_i a_i - load_i), from the solve's own
+    // accelerations in T.
+    std::vector<V6<T>> force;
 };
 
 // The solve. With want_tau0, also tau0_j = -S_j^T sum_{subtree} load (qdd = 0 for tau = tau0).
@@ -467,6 +472,10 @@ Result<T> solve(const ModelData &m, const Loads &L, bool want_tau0 = false) {
             pA[f.body].v[3 + i] -= F[i];
         }
     }
+    // The bodies' own inertias and loads (-pA), kept for the constraint forces: the inward pass
+    // below accumulates the subtrees into IA and pA.
+    const std::vector<M6<T>> I0 = IA;
+    const std::vector<V6<T>> p0 = pA;
     Result<T> res;
     res.qdd.assign(m.nv, T(0));
     if (want_tau0) {
@@ -596,6 +605,22 @@ Result<T> solve(const ModelData &m, const Loads &L, bool want_tau0 = false) {
         }
         acc[J.child] = a;
     }
+    // Constraint forces: net[b] = I_b a_b - load_b, the children's subtree sums carried up.
+    std::vector<V6<T>> net(nb);
+    for (int32_t b = 0; b < nb; ++b)
+        for (int r = 0; r < 6; ++r) {
+            T s = p0[b].v[r];
+            for (int c = 0; c < 6; ++c) s += I0[b].a[r][c] * acc[b].v[c];
+            net[b].v[r] = s;
+        }
+    for (int32_t k = nj - 1; k >= 0; --k) {
+        const JointData &J = m.joints[ord.order[k]];
+        if (J.parent < 0) continue;
+        const V6<T> up = force_up(kin[ord.order[k]], net[J.child]);
+        for (int r = 0; r < 6; ++r) net[J.parent].v[r] += up.v[r];
+    }
+    res.force.resize(nj);
+    for (int32_t j = 0; j < nj; ++j) res.force[j] = net[m.joints[j].child];
     return res;
 }
 

@@ -12,6 +12,11 @@ the solve's measure, against 10x the ABA's error, the allowance / 10), over the 
 skipped joints and were not answered by the rounding fallback: solves, how many are above
 10x, the largest ratio (docs/hardcases.md, "The adaptive solves' computed joints refined");
 
+then one row per family for the constraint forces (`force`: the largest joint's error over
+the largest joint force, against the reference's): the ABA's worst, the exact DCA's worst and
+its largest ratio to max(the ABA's, 1e-15), and the same ratio for the adaptive solves'
+computed joints (docs/hardcases.md, "Constraint forces");
+
 then, from the bound-truth sweep's records ("solver": "bound"), one row per family: solves,
 how many error_bound alone put below the truth, not certified, certified bounds below the
 truth (asserted 0), tightness (error_bound + rounding_bound) / true over the certified solves,
@@ -90,6 +95,29 @@ def main(path):
         print("|---|---:|---:|---:|")
         for fam, v in comp.items():
             print("| %s | %d | %d | %s |" % (fam, len(v), sum(1 for x in v if x > 10.0), fmt(max(v))))
+    forces = {}
+    for name in order:
+        aba, dca = rows[name].get("aba"), rows[name].get("dca")
+        if not aba or aba.get("force") is None:
+            continue
+        floor = max(aba["force"], 1e-15)
+        f = forces.setdefault(aba["family"], {"aba": 0.0, "dca": 0.0, "dca_ratio": 0.0, "adaptive": 0.0})
+        f["aba"] = max(f["aba"], aba["force"])
+        if dca and dca.get("force") is not None:
+            f["dca"] = max(f["dca"], dca["force"])
+            f["dca_ratio"] = max(f["dca_ratio"], dca["force"] / floor)
+        for m in METRICS:
+            for r in rows[name].get("adaptive", {}).get(m, []):
+                if r["status"] == 0 and r.get("force") is not None:
+                    f["adaptive"] = max(f["adaptive"], r["force"] / floor)
+    if forces:
+        print()
+        print("| family | ABA forces (worst) | exact DCA forces (worst) | DCA / max(ABA, 1e-15) | "
+              "adaptive computed joints / max(ABA, 1e-15) |")
+        print("|---|---:|---:|---:|---:|")
+        for fam, f in forces.items():
+            print("| %s | %s | %s | %s | %s |" % (fam, fmt(f["aba"]), fmt(f["dca"]), fmt(f["dca_ratio"]),
+                                                 fmt(f["adaptive"])))
     if bound:
         print()
         print("| family | solves | error_bound alone below the truth | not certified | "
