@@ -929,9 +929,10 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  constraint forces and accelerations are refined first by the DCA's own
  *  residual (across each joint, the bodies' relative acceleration against
  *  S qdd, and Q - S^T f: docs/math.md 13a, "The joint forces of a refined
- *  solve"); the forces are then that refinement's, or the inverse dynamics'
- *  of the refined accelerations where their estimated error is at the
- *  rounding level. A cycle's first step is the plain correction
+ *  solve"); the forces are then that refinement's (when it converged), or
+ *  the inverse dynamics' of the refined accelerations where their estimated
+ *  error is at the rounding level or below the unrefined forces'. A cycle's
+ *  first step is the plain correction
  *  qdd += DCA^-1(Q - ID(qdd)), about one more pass over the tree's nodes,
  *  and where it is resolved (the usual case) the cycle ends there; otherwise
  *  up to 128 steps of one such pass each (a further cycle when the last one's

@@ -224,21 +224,13 @@ static void test_joint_types(void **state)
     int k, nref = 0, nsolve = 0, nf = 0;
     (void)state;
     for (k = 0; k < 12; k++) {
-        test_tree_spec sp;
         aqs_linkage *L, *X;
-        uint64_t r2;
+        uint64_t r2 = rng;
         int32_t nv, nj, j, e, mi;
         double fe = 0.0, fex = 0.0, fmaxall = 0.0;
         double *ref, *q, *qx, *fref, *f, *fx;
-        memset(&sp, 0, sizeof sp);
-        sp.nbodies = 60;
-        sp.floating = k % 2;
-        sp.gravity = 1;
-        sp.nforces = 4;
-        sp.mass_spread = 1e2;
-        r2 = rng;
-        L = test_random_tree(&rng, &sp);
-        X = test_random_tree(&r2, &sp);
+        L = test_mixed_tree(&rng, 60, k % 2, 4, 1e2);
+        X = test_mixed_tree(&r2, 60, k % 2, 4, 1e2);
         assert_int_equal(aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv), AQS_OK);
         ref = calloc((size_t)nv, sizeof *ref);
         q = calloc((size_t)nv, sizeof *q);

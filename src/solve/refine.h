@@ -11,10 +11,11 @@
  * DCA's own residual first (arefine_solve over every node, which from then on
  * has the node updates keep their load factors), then up to L->refine_max
  * GMRES cycles on L->qdd, each kept only when it is finite and lowers the
- * residual's 2-norm; L->cforce holds the first refinement's forces, or the
- * inverse dynamics' forces of the refined accelerations where their
- * estimated error is at the rounding level (fixed joints' included; see
- * FORCES in refine.c). The DCA's stored b, rho, gamma and rounding levels
+ * residual's 2-norm; L->cforce holds the first refinement's forces (when it
+ * converged; else the unrefined ones), or the inverse dynamics' forces of the
+ * refined accelerations where their estimated error is at the rounding level
+ * or below the unrefined forces' (fixed joints' included; see FORCES in
+ * refine.c). The DCA's stored b, rho, gamma and rounding levels
  * are those of the unrefined solve again on return, its handle forces the
  * first refinement's; the solve's stats are not changed. Its arrays are
  * allocated at the first call that refines; if that allocation fails the

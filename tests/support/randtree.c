@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 static void random_quat(uint64_t *rng, const test_tree_spec *sp, double q[4])
 {
@@ -99,4 +100,16 @@ aqs_linkage *test_random_tree(uint64_t *rng, const test_tree_spec *sp)
         assert_int_equal(aqs_body_set_force(L, (int32_t)test_uniform(rng, 0, sp->nbodies), f, p, tq), AQS_OK);
     }
     return L;
+}
+
+aqs_linkage *test_mixed_tree(uint64_t *rng, int32_t nbodies, int floating, int nforces, double mass_spread)
+{
+    test_tree_spec sp;
+    memset(&sp, 0, sizeof sp);
+    sp.nbodies = nbodies;
+    sp.floating = floating;
+    sp.gravity = 1;
+    sp.nforces = nforces;
+    sp.mass_spread = mass_spread;
+    return test_random_tree(rng, &sp);
 }

@@ -26,4 +26,8 @@ typedef struct {
  * random positions, with the gravity and loads the spec asks for. */
 aqs_linkage *test_random_tree(uint64_t *rng, const test_tree_spec *sp);
 
+/* test_random_tree with joints of every type, gravity, nforces loads, masses
+ * over mass_spread, a floating base when floating is set. */
+aqs_linkage *test_mixed_tree(uint64_t *rng, int32_t nbodies, int floating, int nforces, double mass_spread);
+
 #endif
