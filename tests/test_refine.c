@@ -450,7 +450,7 @@ static void test_out_of_memory(void **state)
     assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
     assert_int_equal(aqs_linkage_solve(X), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(X, q0, 40), AQS_OK);
-    for (k = 1; k <= 7; k++) { /* refine_alloc's seven blocks */
+    for (k = 1; k <= 8; k++) { /* refine_alloc's eight blocks */
         live = cs.live;
         cs.fail_at = cs.count + k;
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
@@ -469,6 +469,51 @@ static void test_out_of_memory(void **state)
     aqs_linkage_destroy(L);
     aqs_linkage_destroy(X);
     assert_int_equal(cs.live, 0);
+}
+
+/* Out of memory in the joint forces' first refinement (arefine_solve's
+ * arrays and the load factors it enables, allocated after refine_alloc's):
+ * each allocation failed in turn on a fresh linkage (welded bodies on), the
+ * solve succeeds, GMRES still refines the accelerations (within 1e-13 of the
+ * ABA's, as unrefined they are not), nothing leaks; the allocation count
+ * reached without a failure ends the loop (at least one failure tested). */
+static void test_out_of_memory_forces(void **state)
+{
+    aqs_linkage *A = altmass(40, 1e6, 1, 5);
+    int32_t nv, nj;
+    double qa[64], q[64];
+    long k, tested = 0, base;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(A, NULL, &nj, NULL, &nv), AQS_OK);
+    assert_true(nv <= 64);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK); /* the ABA */
+    assert_int_equal(aqs_linkage_get_accelerations(A, qa, (size_t)nv), AQS_OK);
+    for (k = 9;; k++) { /* refine_alloc's eight blocks come first (test_out_of_memory) */
+        counting_state cs;
+        aqs_linkage *L;
+        int failed;
+        memset(&cs, 0, sizeof cs);
+        L = altmass_in(&cs, 40, 1e6, 1, 5);
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+        base = cs.count;
+        /* the DCA's own arrays were allocated by set_exact_solver; the solve
+         * allocates only the refinements' */
+        cs.fail_at = base + k;
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        failed = cs.count >= cs.fail_at;
+        assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+        assert_true(test_rel_diff(q, qa, (size_t)nv) <= 1e-13);
+        assert_true(L->s.refined >= 1);
+        cs.fail_at = 0;
+        aqs_linkage_destroy(L);
+        assert_int_equal(cs.live, 0);
+        if (!failed) break;
+        tested++;
+    }
+    print_message("%ld allocations of the first refinement failed in turn\n", tested);
+    assert_true(tested >= 1);
+    aqs_linkage_destroy(A);
 }
 
 /* aqs_linkage_set_exact_refinement: 0 turns it off (the unrefined answer,
@@ -828,6 +873,7 @@ int main(void)
         cmocka_unit_test(test_adaptive_all),
         cmocka_unit_test(test_altmass_restart),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_out_of_memory_forces),
         cmocka_unit_test(test_setting),
         cmocka_unit_test(test_rest),
         cmocka_unit_test(test_rounding_fallback),
