@@ -266,15 +266,16 @@ static int correction(aqs_linkage *L, double *r, int loads_only)
 }
 
 /* No further Krylov step is worth a node pass: the last one moved the
- * iterate by at most REFINE_LEVEL u ||q1|| (max norms). Each step multiplies
+ * iterate by at most level u ||q1|| (max norms; REFINE_LEVEL, REFINE_LEVEL_LATER
+ * or LOADS_LEVEL above). Each step multiplies
  * the error by about the DCA's relative error level on that load where it
  * is below 1, so the next one would be that much smaller again: at the
  * rounding level, where the random trees' first step (4e2 .. 7e2 u) already
  * leaves them. */
-static int resolved(double dmax, double qmax, int32_t step)
+static int resolved(double dmax, double qmax, double level)
 {
     const double u = 1.1102230246251565e-16;
-    return dmax <= (step ? REFINE_LEVEL_LATER : REFINE_LEVEL) * u * qmax;
+    return dmax <= level * u * qmax;
 }
 
 /* One cycle of right-preconditioned GMRES on M dq = r (R->r, norm rn), P =
@@ -331,7 +332,7 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
                     dmax = fmax(dmax, fabs(R->dq[i]));
                     qmax = fmax(qmax, fabs(R->q1[i]));
                 }
-                rs = cycle == 0 && dmax <= (loads ? LOADS_LEVEL : REFINE_LEVEL) * 1.1102230246251565e-16 * qmax;
+                rs = cycle == 0 && resolved(dmax, qmax, loads ? LOADS_LEVEL : REFINE_LEVEL);
                 if (rs || !loads) break;
                 loads = 0; /* the loads-only correction not resolved: the full one instead */
             }
@@ -402,7 +403,8 @@ static int32_t gmres_cycle(aqs_linkage *L, double rn, int cycle, int *done, doub
         k = j + 1;
         *est = fabs(g[j + 1]);
         *sum = qmax > 0.0 ? smax / qmax : 0.0;
-        if ((resolved(dmax, qmax, j || cycle) && (cycle == 0 || *est <= LATER_DROP * rn)) ||
+        if ((resolved(dmax, qmax, j || cycle ? REFINE_LEVEL_LATER : REFINE_LEVEL) &&
+             (cycle == 0 || *est <= LATER_DROP * rn)) ||
             nw == 0.0) { /* nw = 0: the exact solution is in the space */
             *done = 1;
             break;
