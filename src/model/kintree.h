@@ -42,6 +42,9 @@ static inline void kin_pack_inertia(const double *F, double *P)
 }
 
 /* o = I v for a packed spatial inertia I. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 static inline void kin_inertia_mul(const double *I, const double *v, double *o)
 {
     const double *A = I + KIN_PA, *B = I + KIN_PB, *C = I + KIN_PC;

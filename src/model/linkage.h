@@ -370,6 +370,8 @@ struct aqs_linkage {
     struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
     struct arefine *arf;   /* the adaptive solve's refinement arrays (src/solve/arefine.c); NULL
                               until an adaptive solve refines */
+    struct aba_refine *abarf; /* the articulated-body solve's refinement arrays (src/solve/abarefine.c);
+                                 NULL until an articulated-body solve refines */
     struct refine *rf;     /* the exact DCA solve's refinement arrays (src/solve/refine.c); NULL until
                               an exact DCA solve refines */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */

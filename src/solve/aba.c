@@ -30,6 +30,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "abarefine.h"
 #include "adaptive.h"
 #include "dca.h"
 #include "dense.h"
@@ -123,6 +124,7 @@ aqs_status aba_alloc(aqs_linkage *L)
 void aba_free(aqs_linkage *L)
 {
     aba_state *a = &L->aba;
+    aba_refine_free(L);
     lk_free(L, a->joint);
     lk_free(L, a->node);
     lk_free(L, a->pos_of_comp);
@@ -326,7 +328,7 @@ ABA_INLINE void motion_from_parent(const pose *P, const double *v, double *o)
 
 /* D = S^T U (d x d) from the rows U_k = IA S_k; its inverse into Dinv.
  * Returns 0, or -1 when D is not numerically positive definite. */
-static int joint_space_inverse(const double *S, const double *U, int d, double *Dinv)
+int aba_joint_space_inverse(const double *S, const double *U, int d, double *Dinv)
 {
     double D[36];
     int i, j, r;
@@ -366,7 +368,7 @@ static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node
         }
         u[j] = Q[j] - s;
     }
-    if (joint_space_inverse(S, U, d, Dinv) != 0) return singular(L, jt);
+    if (aba_joint_space_inverse(S, U, d, Dinv) != 0) return singular(L, jt);
     /* w = D^-1 u; Ia = IA - U^T D^-1 U (U stored as d rows), pa = pA + U^T w */
     for (j = 0; j < d; j++) {
         double v = 0.0;
@@ -484,7 +486,7 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
     int d = joint_nv(jt->type), i, j;
     joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-    (void)joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
+    (void)aba_joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
     for (j = 0; j < d; j++) {
         double v = u[j];
         for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
@@ -502,22 +504,36 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     }
 }
 
-static void forward(aqs_linkage *L)
+/* The forward pass. With check, it also returns the bodies' balance of
+ * forces relative to their terms (docs/math.md §5b): with the solve's joint
+ * forces f (f_e = IA a + pA, the force of e on its child c), each body's
+ *   b_c = I_c a_c - f_ext,c - f_e + sum_children X^T f_child
+ * is 0 in exact arithmetic; its linear rows (three of six, at a third of
+ * the cost) show what the rounding of the articulated inertias left
+ * unbalanced. Returned: max_c |b_c|_1 over max_c (|(I_c a_c)_lin|_1 +
+ * m_c |g| + |f_e,lin|_1) (a free fall's forces are 0: its weights are the
+ * scale). b_c is summed in pA (the backward pass's, read at c's turn
+ * before), then read and zeroed by a sweep after the pass. Without check,
+ * 0 (pA zeroed as well). */
+static double forward(aqs_linkage *L, int check)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double g[6];
+    double g[6], tsum = 0.0, bmax = 0.0, gn;
     int32_t k, i;
     const int32_t ahead = prefetch_ahead(m->ne);
     for (i = 0; i < 3; i++) {
         g[i] = 0.0;
         g[3 + i] = -L->gravity[i];
     }
+    gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
+    if (check) /* the loaded composites, for their turns (need[] is 0 after the backward pass) */
+        for (i = 0; i < m->nloaded_comps; i++) a->need[a->pos_of_comp[m->loaded_comps[i]]] = 1;
     for (k = 0; k < m->ne; k++) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc;
-        double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint;
+        double *ac = nd->v.s.acc, *f = L->cforce + 6 * (size_t)jt->joint, *b = nd->pA;
         if (k + ahead < m->ne) prefetch_position(a, k + ABA_AHEAD, (int)sizeof(aba_joint));
         motion_from_parent(&nd->X, ap, ac); /* a' = X a_p */
         if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
@@ -531,9 +547,44 @@ static void forward(aqs_linkage *L)
         }
         kin_inertia_mul(nd->IA, ac, f);
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        /* the balance of forces (the linear rows): this body's terms, its
+         * children's forces added at their turns */
+        if (check) {
+            const double *B = jt->I + KIN_PB, *C = jt->I + KIN_PC;
+            const double t3 = B[0] * ac[0] + B[3] * ac[1] + B[6] * ac[2] + C[0] * ac[3] + C[1] * ac[4] + C[2] * ac[5];
+            const double t4 = B[1] * ac[0] + B[4] * ac[1] + B[7] * ac[2] + C[1] * ac[3] + C[3] * ac[4] + C[4] * ac[5];
+            const double t5 = B[2] * ac[0] + B[5] * ac[1] + B[8] * ac[2] + C[2] * ac[3] + C[4] * ac[4] + C[5] * ac[5];
+            const double sc = fabs(t3) + fabs(t4) + fabs(t5) + C[0] * gn + fabs(f[3]) + fabs(f[4]) + fabs(f[5]);
+            if (sc > tsum) tsum = sc;
+            b[0] = t3 - f[3];
+            b[1] = t4 - f[4];
+            b[2] = t5 - f[5];
+            if (a->need[k]) {
+                const double *fe = m->comp_force + 6 * (size_t)jt->comp;
+                a->need[k] = 0;
+                for (i = 0; i < 3; i++) b[i] -= fe[3 + i];
+            }
+            if (jt->parent >= 0) {
+                const double *R = nd->X.R;
+                double *bp = a->node[jt->parent].pA;
+                bp[0] += R[0] * f[3] + R[1] * f[4] + R[2] * f[5];
+                bp[1] += R[3] * f[3] + R[4] * f[4] + R[5] * f[5];
+                bp[2] += R[6] * f[3] + R[7] * f[4] + R[8] * f[5];
+            }
+        } else {
+            memset(b, 0, sizeof nd->pA); /* ready for the next backward pass */
+        }
         memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
-        memset(nd->pA, 0, sizeof nd->pA);
     }
+    if (!check) return 0.0;
+    for (k = 0; k < m->ne; k++) {
+        double *b = a->node[k].pA;
+        const double v = fabs(b[0]) + fabs(b[1]) + fabs(b[2]);
+        if (!(v <= bmax)) bmax = v; /* NaN too */
+        memset(b, 0, 6 * sizeof(double)); /* ready for the next backward pass */
+    }
+    if (bmax != bmax) return NAN;
+    return tsum > 0.0 ? bmax / tsum : (bmax > 0.0 ? INFINITY : 0.0);
 }
 
 /* Fixed joints: dca_welded_forces_comp takes a composite's leaf handle
@@ -587,7 +638,7 @@ aqs_status aba_solve(aqs_linkage *L)
         L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
         return st;
     }
-    forward(L);
+    L->s.refined = aba_refine(L, forward(L, L->refine_max > 0));
     L->aba.x_valid = 1;
     aba_welded_forces(L);
     L->aba.x_valid = 0;

@@ -34,8 +34,10 @@
 #define COST_AREFINE 5500.0
 #define COST_KEEP_FACTORS 1150.0
 /* The exact solve by the articulated-body algorithm (aba_solve), per
- * effective joint. */
-#define COST_ABA_JOINT 1520.0
+ * effective joint: 1,520 until 2026-12-04, +145 (callgrind, exact_main on
+ * the 5,000-joint molecule) for the forward pass's balance of forces
+ * (docs/math.md §5b). */
+#define COST_ABA_JOINT 1660.0
 /* An exact step's move, per effective joint: joint_integrate, and
  * frames_all per joint. */
 #define COST_ABA_MOVE 40.0

@@ -1,0 +1,252 @@
+/* test_abarefine.c -- the articulated-body solve's balance check and its
+ * refinement (src/solve/abarefine.c, docs/math.md §5b):
+ *   - an arm holding an oblique planar chain of 1,000 links and floating
+ *     trees of every joint type with masses over 1e6: the unrefined ABA
+ *     (aqs_linkage_set_exact_refinement 0) is more than 1e-11 from the exact
+ *     DCA there (measured below), the default one within 1e-14, its
+ *     constraint forces within 1e-12 of the DCA's (relative to the largest);
+ *   - where the balance is at the rounding level (a chain, a free fall, a
+ *     benign random tree) nothing is refined and the answer is bit for bit
+ *     the unrefined one;
+ *   - out of memory in the refinement's arrays: the solve succeeds with the
+ *     unrefined answer, nothing leaks.
+ * The reference is the refined exact DCA: an independent algorithm, within
+ * 1e-15 of the __float128 reference on these models (tests/reference/
+ * hardcases.cpp, families armchain and jtypes: 1.4e-16 .. 5.0e-16). */
+#include "testutil.h"
+#include "randtree.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "linkage.h"
+
+/* The arm of hardcases' "armchain": three 10 kg links (axes z, y, x at q =
+ * 0.3, 0.5, 0.7) holding n links of 1 kg whose axes are (0, 1, 1)/sqrt 2,
+ * gravity (0, -9.81, 0). */
+static aqs_linkage *armchain_in(counting_state *cs, int n)
+{
+    aqs_linkage *L = NULL;
+    const double com[3] = {0.5, 0, 0}, quat[4] = {1, 0, 0, 0}, g[3] = {0, -9.81, 0};
+    const double axes[3][3] = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}}, ob[3] = {0, 0.70710678118654752, 0.70710678118654752};
+    const double Ia[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Ic[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
+    double *q = calloc((size_t)n + 3, sizeof *q);
+    int32_t prev = AQS_WORLD, i, b;
+    assert_non_null(q);
+    if (cs)
+        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
+    else
+        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    for (i = 0; i < n + 3; i++) {
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        assert_int_equal(aqs_body_add(L, i < 3 ? 10.0 : 1.0, com, i < 3 ? Ia : Ic, &b), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, prev, b, pos, quat, i < 3 ? axes[i] : ob, NULL), AQS_OK);
+        prev = b;
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    q[0] = 0.3, q[1] = 0.5, q[2] = 0.7;
+    assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)n + 3), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    free(q);
+    return L;
+}
+
+typedef struct {
+    double acc, force; /* relative to the reference's largest */
+} dist;
+
+/* Solve L with the given exact refinement count and exact solver; into q, f. */
+static void solve_with(aqs_linkage *L, int32_t refine, int32_t solver, double *q, double *f)
+{
+    int32_t nv, nj;
+    aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, refine), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_solver(L, solver), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
+}
+
+static double max_abs(const double *x, size_t n)
+{
+    double m = 0.0;
+    size_t i;
+    for (i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
+    return m;
+}
+
+/* The unrefined ABA, the default ABA and the refined exact DCA of L: the two
+ * ABAs' distances to the DCA; refined: the default ABA's correction count. */
+static void compare(aqs_linkage *L, dist *plain, dist *aba, int32_t *refined)
+{
+    int32_t nv, nj;
+    double *qp, *fp, *qa, *fa, *qd, *fd;
+    aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv);
+    qp = malloc(sizeof(double) * (size_t)nv), qa = malloc(sizeof(double) * (size_t)nv);
+    qd = malloc(sizeof(double) * (size_t)nv);
+    fp = malloc(sizeof(double) * 6 * (size_t)nj), fa = malloc(sizeof(double) * 6 * (size_t)nj);
+    fd = malloc(sizeof(double) * 6 * (size_t)nj);
+    assert_true(qp && qa && qd && fp && fa && fd);
+    solve_with(L, 0, AQS_EXACT_ABA, qp, fp);
+    assert_int_equal(L->s.refined, 0);
+    solve_with(L, AQS_REFINEMENT_MAX, AQS_EXACT_ABA, qa, fa);
+    *refined = L->s.refined;
+    solve_with(L, AQS_REFINEMENT_MAX, AQS_EXACT_DCA, qd, fd);
+    plain->acc = test_max_abs_diff(qp, qd, (size_t)nv) / max_abs(qd, (size_t)nv);
+    plain->force = test_max_abs_diff(fp, fd, 6 * (size_t)nj) / max_abs(fd, 6 * (size_t)nj);
+    aba->acc = test_max_abs_diff(qa, qd, (size_t)nv) / max_abs(qd, (size_t)nv);
+    aba->force = test_max_abs_diff(fa, fd, 6 * (size_t)nj) / max_abs(fd, 6 * (size_t)nj);
+    free(qp), free(qa), free(qd), free(fp), free(fa), free(fd);
+}
+
+/* The arm holding the oblique chain: the unrefined ABA 5e-10 off at 1,000
+ * links (its articulated inertias mix the chain's n^3 out-of-plane inertia
+ * with its O(1) in-plane part in the arm's frame), refined to the DCA's. */
+static void test_armchain(void **state)
+{
+    aqs_linkage *L = armchain_in(NULL, 1000);
+    dist plain, aba;
+    int32_t refined;
+    (void)state;
+    compare(L, &plain, &aba, &refined);
+    printf("armchain 1000: unrefined %.2e (forces %.2e), refined %.2e (forces %.2e), %d corrections\n", plain.acc,
+           plain.force, aba.acc, aba.force, (int)refined);
+    assert_true(plain.acc > 1e-11); /* the loss is there */
+    assert_true(refined >= 1);
+    assert_true(aba.acc <= 1e-14);
+    assert_true(aba.force <= 1e-12);
+    aqs_linkage_destroy(L);
+}
+
+/* Floating trees of every joint type, masses log-uniform over 1e-3 .. 1e3:
+ * the ones whose unrefined ABA loses more than 1e-11 (spherical and planar
+ * joints between very different masses) come out within 1e-14. */
+static void test_mixed_trees(void **state)
+{
+    uint64_t rng = 4242;
+    int k, lossy = 0;
+    (void)state;
+    for (k = 0; k < 12; k++) {
+        aqs_linkage *L = test_mixed_tree(&rng, 60, 1, 3, 1e3);
+        dist plain, aba;
+        int32_t refined;
+        compare(L, &plain, &aba, &refined);
+        printf("mixed tree %d: unrefined %.2e (forces %.2e), refined %.2e (forces %.2e), %d corrections\n", k,
+               plain.acc, plain.force, aba.acc, aba.force, (int)refined);
+        if (plain.acc > 1e-11) lossy++;
+        assert_true(aba.acc <= fmax(1e-14, plain.acc)); /* never worse */
+        if (plain.acc > 1e-13) {
+            assert_true(refined >= 1);
+            assert_true(aba.acc <= 1e-14);
+            assert_true(aba.force <= 1e-12);
+        }
+        aqs_linkage_destroy(L);
+    }
+    assert_true(lossy >= 2); /* the family has the loss this file is about */
+}
+
+/* Where the balance is at the rounding level nothing is refined, and the
+ * answer is bit for bit the unrefined one (the balance reads, never writes,
+ * the solve's values): a chain under gravity, a free fall (floating base,
+ * gravity alone: every joint force 0, the bodies' weights the scale),
+ * benign random trees. */
+static void expect_unrefined(aqs_linkage *L)
+{
+    int32_t nv, nj;
+    double *q0, *q1, *f0, *f1;
+    aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv);
+    q0 = malloc(sizeof(double) * (size_t)nv), q1 = malloc(sizeof(double) * (size_t)nv);
+    f0 = malloc(sizeof(double) * 6 * (size_t)nj), f1 = malloc(sizeof(double) * 6 * (size_t)nj);
+    assert_true(q0 && q1 && f0 && f1);
+    solve_with(L, 0, AQS_EXACT_ABA, q0, f0);
+    solve_with(L, AQS_REFINEMENT_MAX, AQS_EXACT_ABA, q1, f1);
+    assert_int_equal(L->s.refined, 0);
+    assert_memory_equal(q0, q1, sizeof(double) * (size_t)nv);
+    assert_memory_equal(f0, f1, sizeof(double) * 6 * (size_t)nj);
+    free(q0), free(q1), free(f0), free(f1);
+}
+
+static void test_benign_unrefined(void **state)
+{
+    uint64_t rng = 99;
+    int k;
+    test_tree_spec sp;
+    (void)state;
+    memset(&sp, 0, sizeof sp);
+    sp.nbodies = 200, sp.chain = 1, sp.gravity = 1, sp.revolute_only = 1, sp.mass_spread = 1.0;
+    {
+        aqs_linkage *L = test_random_tree(&rng, &sp);
+        expect_unrefined(L);
+        aqs_linkage_destroy(L);
+    }
+    { /* a free fall */
+        aqs_linkage *L = test_mixed_tree(&rng, 40, 1, 0, 10.0);
+        int32_t nv, nj, i;
+        const double g[3] = {0, 0, -9.81};
+        double *q, *f;
+        aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv);
+        assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+        assert_int_equal(aqs_linkage_clear_forces(L), AQS_OK);
+        expect_unrefined(L);
+        /* and it is a free fall: every joint force 0 to the rounding of the weights */
+        q = malloc(sizeof(double) * (size_t)nv), f = malloc(sizeof(double) * 6 * (size_t)nj);
+        assert_true(q && f);
+        assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
+        for (i = 0; i < 6 * nj; i++) assert_true(isnan(f[i]) || fabs(f[i]) <= 1e-12);
+        free(q), free(f);
+        aqs_linkage_destroy(L);
+    }
+    for (k = 0; k < 6; k++) {
+        aqs_linkage *L = test_mixed_tree(&rng, 60, k % 2, 3, 10.0);
+        expect_unrefined(L);
+        aqs_linkage_destroy(L);
+    }
+}
+
+/* Out of memory in the refinement's arrays (its six blocks, each failed in
+ * turn): the solve succeeds unrefined, nothing leaks; then it refines. */
+static void test_out_of_memory(void **state)
+{
+    counting_state cs;
+    aqs_linkage *L, *X = armchain_in(NULL, 200);
+    double q0[203], q1[203], f[6 * 203];
+    long k, live;
+    (void)state;
+    memset(&cs, 0, sizeof cs);
+    L = armchain_in(&cs, 200);
+    solve_with(X, 0, AQS_EXACT_ABA, q0, f);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    for (k = 1; k <= 6; k++) {
+        live = cs.live;
+        cs.fail_at = cs.count + k;
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_true(cs.count >= cs.fail_at); /* the failing allocation was reached */
+        assert_int_equal(L->s.refined, 0);
+        assert_int_equal(cs.live, live);
+        assert_int_equal(aqs_linkage_get_accelerations(L, q1, 203), AQS_OK);
+        assert_memory_equal(q0, q1, sizeof q0);
+    }
+    cs.fail_at = 0;
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_true(L->s.refined >= 1);
+    assert_true(cs.live > live);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q1, 203), AQS_OK);
+    assert_true(memcmp(q0, q1, sizeof q0) != 0);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(X);
+    assert_int_equal(cs.live, 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_armchain),
+        cmocka_unit_test(test_mixed_trees),
+        cmocka_unit_test(test_benign_unrefined),
+        cmocka_unit_test(test_out_of_memory),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
