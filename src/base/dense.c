@@ -471,3 +471,17 @@ int dense_qr_append_simd(double *R, int n, int *present, double *D, int p, int a
     }
     return rows;
 }
+
+int dense_joint_space_inverse(const double *S, const double *U, int d, double *Dinv)
+{
+    double D[36];
+    int i, j, r;
+    for (i = 0; i < d; i++)
+        for (j = 0; j < d; j++) {
+            double v = 0.0;
+            for (r = 0; r < 6; r++) v += S[r * d + i] * U[6 * j + r];
+            D[d * i + j] = v;
+        }
+    dense_symmetrize(D, d);
+    return dense_spd_inverse(D, Dinv, d);
+}

@@ -21,6 +21,10 @@ void dense_symmetrize(double *A, int n);
  * non-positive pivot (MATH.md §3.8). Returns 0, or -1 if A is singular or
  * the result is not finite. out may alias A. */
 int dense_spd_inverse(const double *A, double *out, int n);
+/* A joint's D = S^T U (d x d; S 6 x d row-major, U d rows of 6: U_k = I S_k),
+ * symmetrized, inverted into Dinv (d x d) by dense_spd_inverse: 0, or -1
+ * when D is not numerically positive definite. */
+int dense_joint_space_inverse(const double *S, const double *U, int d, double *Dinv);
 
 
 /* Fixed-size 6x6 kernels (the hot path): the compiler unrolls them. */

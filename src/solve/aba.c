@@ -326,22 +326,6 @@ ABA_INLINE void motion_from_parent(const pose *P, const double *v, double *o)
     o[5] = R[2] * t0 + R[5] * t1 + R[8] * t2;
 }
 
-/* D = S^T U (d x d) from the rows U_k = IA S_k; its inverse into Dinv.
- * Returns 0, or -1 when D is not numerically positive definite. */
-int aba_joint_space_inverse(const double *S, const double *U, int d, double *Dinv)
-{
-    double D[36];
-    int i, j, r;
-    for (i = 0; i < d; i++)
-        for (j = 0; j < d; j++) {
-            double v = 0.0;
-            for (r = 0; r < 6; r++) v += S[r * d + i] * U[6 * j + r];
-            D[d * i + j] = v;
-        }
-    dense_symmetrize(D, d);
-    return dense_spd_inverse(D, Dinv, d);
-}
-
 static aqs_status singular(aqs_linkage *L, const aba_joint *jt)
 {
     return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular", (int)jt->joint);
@@ -368,7 +352,7 @@ static aqs_status backward_general(aqs_linkage *L, const aba_joint *jt, aba_node
         }
         u[j] = Q[j] - s;
     }
-    if (aba_joint_space_inverse(S, U, d, Dinv) != 0) return singular(L, jt);
+    if (dense_joint_space_inverse(S, U, d, Dinv) != 0) return singular(L, jt);
     /* w = D^-1 u; Ia = IA - U^T D^-1 U (U stored as d rows), pa = pA + U^T w */
     for (j = 0; j < d; j++) {
         double v = 0.0;
@@ -486,7 +470,7 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
     int d = joint_nv(jt->type), i, j;
     joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-    (void)aba_joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
+    (void)dense_joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
     for (j = 0; j < d; j++) {
         double v = u[j];
         for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];

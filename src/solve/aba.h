@@ -19,9 +19,6 @@ aqs_status aba_solve(aqs_linkage *L);
  * composites with welded bodies, through dca_welded_forces_comp): after
  * aba_solve, and after a refined exact DCA solve (src/solve/refine.c). */
 void aba_welded_forces(aqs_linkage *L);
-/* D^-1 = (S^T U)^-1 of a multi-dof joint (d x d, symmetrized): 0, or -1 when
- * it is not positive definite. */
-int aba_joint_space_inverse(const double *S, const double *U, int d, double *Dinv);
 /* The poses and inertias read from the solver's order: kintree.h. */
 
 #endif

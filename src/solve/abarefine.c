@@ -16,12 +16,11 @@
  *         gravity, no external force) by the factors the solve kept (U,
  *         D^-1, the poses): bias forces backward, accelerations forward
  *   qdd += dq, a_c += da_c
- * A correction is kept when it lowers the residual, the last one when it
- * lowered it by less than ABA_REFINE_GAIN; at most L->refine_max of them
- * (aqs_linkage_set_exact_refinement, which also switches the balance off
- * at 0). A refined solve whose accelerations moved beyond 64 u of the
- * largest takes the inverse dynamics' forces f_c of its final
- * accelerations; otherwise its own f = IA a + pA stay.
+ * A correction is kept when it lowers the residual; at most L->refine_max
+ * of them (aqs_linkage_set_exact_refinement, which also switches the
+ * balance off at 0). A solve that kept one takes the inverse dynamics'
+ * forces f_c of its final accelerations (its own, f = IA a + pA, are what
+ * the balance found unbalanced).
  * Scratch: the nodes' pA (zero between solves, left zero) and, once a solve
  * refines, the arrays of struct aba_refine (LK_MEM_EXACT, kept). */
 #include "abarefine.h"
@@ -29,7 +28,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "aba.h"
 #include "dense.h"
 #include "kintree.h"
 #include "rounding.h"
@@ -38,7 +36,6 @@ struct aba_refine {
     double *r;    /* nv: the residual */
     double *dq;   /* nv: a correction (the loads pass's u first) */
     double *q0;   /* nv: the accelerations before the correction */
-    double *q1;   /* nv: the unrefined accelerations */
     double *da;   /* 6 ne: the correction's accelerations */
     double *a0;   /* 6 ne: the nodes' accelerations before it */
 };
@@ -50,7 +47,6 @@ void aba_refine_free(aqs_linkage *L)
     lk_free(L, R->r);
     lk_free(L, R->dq);
     lk_free(L, R->q0);
-    lk_free(L, R->q1);
     lk_free(L, R->da);
     lk_free(L, R->a0);
     lk_free(L, R);
@@ -68,10 +64,9 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
     R->r = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->dq = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->q0 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
-    R->q1 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->da = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->a0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
-    if (!R->r || !R->dq || !R->q0 || !R->q1 || !R->da || !R->a0) {
+    if (!R->r || !R->dq || !R->q0 || !R->da || !R->a0) {
         aba_refine_free(L);
         return NULL;
     }
@@ -160,7 +155,7 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
             const int d = joint_nv(jt->type);
             const double *U = a->Um + 6 * a->moff[k];
             joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            (void)aba_joint_space_inverse(S, U, d, Dinv); /* succeeded in the solve */
+            (void)dense_joint_space_inverse(S, U, d, Dinv); /* succeeded in the solve */
             for (j = 0; j < d; j++) {
                 double s = 0.0;
                 for (i = 0; i < 6; i++) s += S[i * d + j] * nd->pA[i];
@@ -202,7 +197,7 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
             const double *U = a->Um + 6 * a->moff[k];
             double rhs[6];
             joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            (void)aba_joint_space_inverse(S, U, d, Dinv);
+            (void)dense_joint_space_inverse(S, U, d, Dinv);
             for (j = 0; j < d; j++) {
                 double v = q[j];
                 for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
@@ -228,13 +223,12 @@ int32_t aba_refine(aqs_linkage *L, double balance)
     aba_state *a = &L->aba;
     struct aba_refine *R;
     const size_t nvb = (size_t)L->nv * sizeof(double);
-    double res, next, dmax = 0.0, qmax = 0.0;
+    double res, next;
     int32_t kept = 0, it, k, i;
     if (L->refine_max <= 0 || !(balance > ABA_REFINE_LEVEL * RND_U) || !isfinite(balance)) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
     res = residual(L, R->r, 0);
-    memcpy(R->q1, L->qdd, nvb); /* the unrefined answer */
     for (it = 0; it < L->refine_max; it++) {
         correction(L, R->r, R->dq, R->da);
         memcpy(R->q0, L->qdd, nvb);
@@ -251,18 +245,10 @@ int32_t aba_refine(aqs_linkage *L, double balance)
             break;
         }
         kept++;
-        if (next * ABA_REFINE_GAIN > res) break;
         res = next;
     }
-    /* The forces: the inverse dynamics' of the refined accelerations where
-     * these moved beyond the rounding (the solve's own, f = IA a + pA, carry
-     * what its accelerations lost); else the solve's, which the inverse
-     * dynamics' would not better (their sums over subtrees amplify the
-     * accelerations' rounding where these are large and cancel). */
-    for (i = 0; i < L->nv; i++) {
-        dmax = fmax(dmax, fabs(L->qdd[i] - R->q1[i]));
-        qmax = fmax(qmax, fabs(L->qdd[i]));
-    }
-    if (kept && dmax > 64.0 * RND_U * qmax) (void)residual(L, NULL, 1);
+    /* The forces: the inverse dynamics' of the refined accelerations (the
+     * solve's own, f = IA a + pA, are what the balance found unbalanced) */
+    if (kept) (void)residual(L, NULL, 1);
     return kept;
 }

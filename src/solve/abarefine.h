@@ -9,9 +9,6 @@
 /* The bodies' force balance (aba.c's forward pass), in units of u, above
  * which a solve is refined. */
 #define ABA_REFINE_LEVEL 16.0
-/* A refinement's end: a correction that lowered the residual less than
- * this factor is the last one. */
-#define ABA_REFINE_GAIN 2.0
 
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): measure the residual and refine where it exceeds the
