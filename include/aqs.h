@@ -926,13 +926,13 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  against its joint forces, 0 in exact arithmetic; about 145 instructions
  *  a joint, +9 %); where the largest imbalance is above 16 u of the largest
  *  term (it lost digits: spherical and planar joints between very different
- *  masses on a floating base, 4e-9 off; a long planar chain held in an
+ *  masses, up to 1.4e-9 off; a long planar chain held in an
  *  oblique frame, 4e-9 at 2,000 links), at most max_corrections corrections
  *  qdd += ABA^-1(Q - ID(qdd)) by the solve's own factors, each kept only when
- *  it lowers the inverse-dynamics residual (2e-16 there); the constraint
- *  forces are then the inverse dynamics' of the refined accelerations when
- *  these moved beyond 64 u. Elsewhere the answer is bit for bit the
- *  unrefined one. Its arrays (4 doubles per dof and 12 per joint) are
+ *  it lowers the inverse-dynamics residual (2e-16 .. 5e-14 there); a solve
+ *  that kept one takes the inverse dynamics' constraint forces of its
+ *  refined accelerations. Elsewhere the answer is bit for bit the
+ *  unrefined one. Its arrays (3 doubles per dof and 12 per joint) are
  *  allocated at the first solve that refines; if that fails, the solve
  *  succeeds unrefined. max_corrections 0 turns the check off too.
  *

@@ -809,11 +809,12 @@ static void test_planar_far_field(void **state)
  * dynamics' of the refined accelerations. Measured (12 trees): 4.7e-16 ..
  * 9.3e-13 with, 4.1e-16 .. 9.3e-13 without (the floating trees 1.2e-13 ..
  * 9.3e-13 either way: the first refinement did not converge there and was
- * not kept); the accelerations 3.1e-16 .. 6.6e-13 from the ABA's. No
- * extended-precision reference here (the hard-case suite has it, revolute
- * and free joints only), so only the two double answers' agreement is
- * asserted: within 1e-11, and with the first refinement never more than 2x
- * (plus 1e-15) the distance without it. */
+ * not kept); the accelerations 3.1e-16 .. 6.6e-13 from the ABA's. The ABA is
+ * the textbook pass (its own refinement off, docs/math.md §5b). No
+ * extended-precision reference here (the hard-case suite's family jtypes
+ * has one for every joint type), so only the two double answers' agreement
+ * is asserted: within 1e-11, and with the first refinement never more than
+ * 2x (plus 1e-15) the distance without it. */
 static void test_forces_joint_types(void **state)
 {
     uint64_t rng = 4242;
@@ -839,7 +840,19 @@ static void test_forces_joint_types(void **state)
         assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(X, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_ABA), AQS_OK); /* the generator chose the DCA */
-        aba_then_dca(L, nv, nj, qa, fa, q, f);
+        /* the textbook ABA (its own refinement, docs/math.md §5b, off: it
+         * refines several of these trees and its forces are then the
+         * inverse dynamics') as the fixed yardstick of the two DCA answers */
+        assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(L, qa, (size_t)nv), AQS_OK);
+        assert_int_equal(aqs_linkage_get_constraint_forces(L, fa, 6 * (size_t)nj), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_refinement(L, AQS_REFINEMENT_MAX), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+        assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
         assert_int_equal(aqs_linkage_solve(X), AQS_OK);
         assert_int_equal(aqs_linkage_get_constraint_forces(X, fx, 6 * (size_t)nj), AQS_OK);
         assert_true(test_rel_diff(q, qa, (size_t)nv) <= 1e-11);

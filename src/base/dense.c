@@ -485,3 +485,25 @@ int dense_joint_space_inverse(const double *S, const double *U, int d, double *D
     dense_symmetrize(D, d);
     return dense_spd_inverse(D, Dinv, d);
 }
+
+void dense_joint_accel(const double *S, const double *U, const double *Dinv, int d, const double *u, double *ac,
+                       double *qdd)
+{
+    double rhs[6];
+    int i, j;
+    for (j = 0; j < d; j++) {
+        double v = u[j];
+        for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
+        rhs[j] = v;
+    }
+    for (j = 0; j < d; j++) {
+        double v = 0.0;
+        for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
+        qdd[j] = v;
+    }
+    for (i = 0; i < 6; i++) {
+        double v = 0.0;
+        for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
+        ac[i] += v;
+    }
+}

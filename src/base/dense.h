@@ -25,6 +25,10 @@ int dense_spd_inverse(const double *A, double *out, int n);
  * symmetrized, inverted into Dinv (d x d) by dense_spd_inverse: 0, or -1
  * when D is not numerically positive definite. */
 int dense_joint_space_inverse(const double *S, const double *U, int d, double *Dinv);
+/* A joint's accelerations from its articulated factors (S, U as above, Dinv
+ * d x d): qdd = Dinv (u - U ac), then ac += S qdd. qdd may alias u. */
+void dense_joint_accel(const double *S, const double *U, const double *Dinv, int d, const double *u, double *ac,
+                       double *qdd);
 
 
 /* Fixed-size 6x6 kernels (the hot path): the compiler unrolls them. */

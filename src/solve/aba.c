@@ -467,25 +467,11 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     const aba_state *a = &L->aba;
     const int32_t mo = a->moff[jt - a->joint];
     const double *U = a->Um + 6 * mo, *u = a->um + mo;
-    double S[36], Dinv[36], rhs[6], *qdd = L->qdd + jt->voff;
-    int d = joint_nv(jt->type), i, j;
+    double S[36], Dinv[36];
+    const int d = joint_nv(jt->type);
     joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
     (void)dense_joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
-    for (j = 0; j < d; j++) {
-        double v = u[j];
-        for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
-        rhs[j] = v;
-    }
-    for (j = 0; j < d; j++) {
-        double v = 0.0;
-        for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
-        qdd[j] = v;
-    }
-    for (i = 0; i < 6; i++) {
-        double v = 0.0;
-        for (j = 0; j < d; j++) v += S[i * d + j] * qdd[j];
-        ac[i] += v;
-    }
+    dense_joint_accel(S, U, Dinv, d, u, ac, L->qdd + jt->voff);
 }
 
 /* The forward pass. With check, it also returns the bodies' balance of

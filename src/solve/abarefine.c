@@ -195,24 +195,9 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
         } else if (jt->type != AQS_JOINT_FIXED) {
             const int d = joint_nv(jt->type);
             const double *U = a->Um + 6 * a->moff[k];
-            double rhs[6];
             joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
             (void)dense_joint_space_inverse(S, U, d, Dinv);
-            for (j = 0; j < d; j++) {
-                double v = q[j];
-                for (i = 0; i < 6; i++) v -= U[6 * j + i] * ac[i];
-                rhs[j] = v;
-            }
-            for (j = 0; j < d; j++) {
-                double v = 0.0;
-                for (i = 0; i < d; i++) v += Dinv[d * j + i] * rhs[i];
-                q[j] = v;
-            }
-            for (i = 0; i < 6; i++) {
-                double v = 0.0;
-                for (j = 0; j < d; j++) v += S[i * d + j] * q[j];
-                ac[i] += v;
-            }
+            dense_joint_accel(S, U, Dinv, d, q, ac, q); /* q holds u from the backward pass */
         }
     }
 }

@@ -444,10 +444,12 @@ void build_altmass(Case &c, int n, double ratio, uint64_t seed) {
 }
 
 // Random tree of n bodies: revolute joints with random axes and frames, parent the previous
-// body with probability 0.7, else a random earlier one; masses 0.5..2 with box inertias.
-void random_tree(Builder &B, Rng &r, int n) {
+// body with probability 0.7, else a random earlier one; masses 0.5..2 with box inertias. With
+// mass, the masses it draws; with type, each joint's type drawn after its frame and axis.
+void random_tree(Builder &B, Rng &r, int n, const std::function<double(Rng &)> &mass = nullptr,
+                 const std::function<int32_t(Rng &, int)> &type = nullptr) {
     for (int i = 0; i < n; ++i) {
-        const double m = r.uniform(0.5, 2.0);
+        const double m = mass ? mass(r) : r.uniform(0.5, 2.0);
         const double x = r.uniform(0.2, 1.5), y = r.uniform(0.05, 0.3), z = r.uniform(0.05, 0.3);
         const double com[3] = {r.uniform(0.2, 0.8), r.uniform(-0.1, 0.1), r.uniform(-0.1, 0.1)};
         const int32_t b =
@@ -457,7 +459,7 @@ void random_tree(Builder &B, Rng &r, int n) {
         double quat[4], axis[3];
         random_quat(r, quat);
         random_unit(r, axis);
-        B.joint(AQS_JOINT_REVOLUTE, parent, b, pos, quat, axis);
+        B.joint(type ? type(r, i) : AQS_JOINT_REVOLUTE, parent, b, pos, quat, axis);
     }
 }
 
@@ -606,20 +608,10 @@ void build_jtypes(Case &c, int n, bool floating, bool mixed, uint64_t seed) {
     static const int32_t kTypes[] = {AQS_JOINT_REVOLUTE,    AQS_JOINT_PRISMATIC, AQS_JOINT_SPHERICAL,
                                      AQS_JOINT_UNIVERSAL,   AQS_JOINT_CYLINDRICAL, AQS_JOINT_PLANAR,
                                      AQS_JOINT_FIXED};
-    for (int i = 0; i < n; ++i) {
-        const double m = mixed ? std::exp(r.uniform(std::log(1e-3), std::log(1e3))) : r.uniform(0.5, 2.0);
-        const double x = r.uniform(0.2, 1.5), y = r.uniform(0.05, 0.3), z = r.uniform(0.05, 0.3);
-        const double com[3] = {r.uniform(0.2, 0.8), r.uniform(-0.1, 0.1), r.uniform(-0.1, 0.1)};
-        const int32_t b =
-            B.body(m, com, m / 12 * (y * y + z * z), m / 12 * (x * x + z * z), m / 12 * (x * x + y * y));
-        const int32_t parent = i == 0 ? AQS_WORLD : (r.uniform(0, 1) < 0.7 ? i - 1 : r.below(i));
-        const double pos[3] = {i ? r.uniform(0.5, 1.5) : 0.0, r.uniform(-0.3, 0.3), r.uniform(-0.3, 0.3)};
-        double quat[4], axis[3];
-        random_quat(r, quat);
-        random_unit(r, axis);
-        const int32_t type = i == 0 && floating ? AQS_JOINT_FREE : kTypes[r.below(7)];
-        B.joint(type, parent, b, pos, quat, axis);
-    }
+    random_tree(
+        B, r, n,
+        [=](Rng &g) { return mixed ? std::exp(g.uniform(std::log(1e-3), std::log(1e3))) : g.uniform(0.5, 2.0); },
+        [=](Rng &g, int i) { return i == 0 && floating ? AQS_JOINT_FREE : kTypes[g.below(7)]; });
     B.finalize();
     if (!B.ok()) return;
     std::vector<double> q;

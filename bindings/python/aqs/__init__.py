@@ -1041,12 +1041,15 @@ class Linkage:
         preconditioned by the DCA itself with the inverse-dynamics residual
         as the load, its first step the plain correction, each cycle kept
         only when it lowers the residual (aqs_linkage_set_exact_refinement,
-        docs/math.md 13a). Any phase."""
+        docs/math.md 13a). The articulated-body solve (the default exact
+        solver) likewise takes at most max_corrections corrections where its
+        balance of forces says it lost digits, and 0 turns that check off
+        (docs/math.md 5b). Any phase."""
         self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
 
     @property
     def exact_refinement(self):
-        """The maximum corrections of an exact DCA solve (aqs_linkage_get_exact_refinement)."""
+        """The maximum corrections of an exact solve (aqs_linkage_get_exact_refinement)."""
         value = ctypes.c_int32()
         self._call("aqs_linkage_get_exact_refinement", ctypes.byref(value))
         return value.value
