@@ -924,7 +924,7 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  The articulated-body solve (docs/math.md 5b): its forward pass also
  *  checks each body's balance of forces (the body's inertial force and load
  *  against its joint forces, 0 in exact arithmetic; about 145 instructions
- *  a joint, +9 %); where the largest imbalance is above 16 u of the largest
+ *  a joint, +9 %, +12 .. 14 % time); where the largest imbalance is above 16 u of the largest
  *  term (it lost digits: spherical and planar joints between very different
  *  masses, up to 1.4e-9 off; a long planar chain held in an
  *  oblique frame, 4e-9 at 2,000 links), at most max_corrections corrections

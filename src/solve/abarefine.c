@@ -75,9 +75,11 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
 
 /* The residual of the nodes' accelerations (L->qdd their joint parts):
  * into r when r is not NULL, the forces into L->cforce when forces is set.
- * Returns max |r| / max(|Q|, |S^T f|) (0 when both are 0; NaN or inf when
- * a value is not finite). pA is the inward pass's accumulator: zero before
- * (the forward pass leaves it so) and after. */
+ * Returns max |r| over the larger of the largest joint force and the sum
+ * of the bodies' terms |I_c a_c| + m_c |g| (torques weighed by 1/l as in
+ * rounding.c; 0 when both are 0; NaN when a value is not finite). pA is
+ * the inward pass's accumulator: zero before (the forward pass leaves it
+ * so) and after. */
 static double residual(aqs_linkage *L, double *r, int forces)
 {
     const model *m = &L->m;
@@ -85,7 +87,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
     const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
     double rmax = 0.0, smax = 0.0, tsum = 0.0, S[36], f[6];
-    int32_t k, i, j;
+    int32_t k, i, j, bad = 0;
     for (i = 0; i < m->nloaded_comps; i++) {
         const int32_t c = m->loaded_comps[i];
         double *pA = a->node[a->pos_of_comp[c]].pA;
@@ -105,7 +107,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
             const double s = f[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5], e = Q[0] - s; /* S = e_z */
             if (r) r[jt->voff] = e;
             rmax = fmax(rmax, fabs(e) * (jt->type == AQS_JOINT_REVOLUTE ? il : 1.0));
-            if (!(e == e)) rmax = NAN;
+            bad |= !(e == e); /* fmax drops a NaN */
         } else if (jt->type != AQS_JOINT_FIXED) {
             const int d = joint_nv(jt->type);
             joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
@@ -116,7 +118,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
                 if (r) r[jt->voff + j] = e;
                 /* a torque slot (its subspace column angular) weighed by 1/l */
                 rmax = fmax(rmax, fabs(e) * (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0 ? il : 1.0));
-                if (!(e == e)) rmax = NAN;
+                bad |= !(e == e);
             }
         }
         smax = fmax(smax, (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fabs(f[3]) + fabs(f[4]) + fabs(f[5]));
@@ -129,7 +131,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
         memset(nd->pA, 0, sizeof nd->pA);
     }
     smax = fmax(smax, tsum);
-    if (rmax != rmax || !isfinite(smax)) return NAN;
+    if (bad || !isfinite(smax)) return NAN;
     return smax > 0.0 ? rmax / smax : (rmax > 0.0 ? INFINITY : 0.0);
 }
 
