@@ -17,6 +17,10 @@ the largest joint force, against the reference's): the ABA's worst, the exact DC
 its largest ratio to max(the ABA's, 1e-15), and the same ratio for the adaptive solves'
 computed joints (docs/hardcases.md, "Constraint forces");
 
+then one row per family for the library's articulated-body solve against the textbook pass
+(`refined_rel2`, `refined_force`: refined where its balance of forces says it lost digits,
+docs/math.md 5b): cases, how many it refined, the worst of each;
+
 then, from the bound-truth sweep's records ("solver": "bound"), one row per family: solves,
 how many error_bound alone put below the truth, not certified, certified bounds below the
 truth (asserted 0), tightness (error_bound + rounding_bound) / true over the certified solves,
@@ -118,6 +122,28 @@ def main(path):
         for fam, f in forces.items():
             print("| %s | %s | %s | %s | %s |" % (fam, fmt(f["aba"]), fmt(f["dca"]), fmt(f["dca_ratio"]),
                                                  fmt(f["adaptive"])))
+    # The library's ABA (refined where its balance of forces says it lost digits, docs/math.md
+    # 5b) against the textbook pass the rows above use as the yardstick.
+    refined = {}
+    for name in order:
+        aba = rows[name].get("aba")
+        if not aba or aba.get("refined_rel2") is None:
+            continue
+        r = refined.setdefault(aba["family"], {"cases": 0, "changed": 0, "rel2": 0.0, "now": 0.0,
+                                               "force": 0.0, "force_now": 0.0})
+        r["cases"] += 1
+        r["changed"] += aba["rel2"] != aba["refined_rel2"] or aba["force"] != aba["refined_force"]
+        r["rel2"] = max(r["rel2"], aba["rel2"])
+        r["now"] = max(r["now"], aba["refined_rel2"])
+        r["force"] = max(r["force"], aba["force"])
+        r["force_now"] = max(r["force_now"], aba["refined_force"])
+    if refined:
+        print()
+        print("| family | cases | refined | textbook ABA (worst) | ABA (worst) | textbook forces | forces |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        for fam, r in refined.items():
+            print("| %s | %d | %d | %s | %s | %s | %s |" % (fam, r["cases"], r["changed"], fmt(r["rel2"]),
+                                                         fmt(r["now"]), fmt(r["force"]), fmt(r["force_now"])))
     if bound:
         print()
         print("| family | solves | error_bound alone below the truth | not certified | "
