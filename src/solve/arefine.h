@@ -16,7 +16,8 @@
  * reduced system's residual; the joint forces have converged (*converged
  * set to 1, when converged is not NULL) when the last correction, kept or
  * not, moved none by more than 64 u of the largest, or the residual reached
- * 0. The stored b,
+ * 0, or each correction after the first moved them by at most 1/16 of what
+ * the first did. The stored b,
  * rho, gamma and rounding levels are the solve's again on return. Returns the
  * corrections kept (0: nothing changed; also when out of memory, and the next
  * call tries again). */
