@@ -584,3 +584,9 @@ void rounding_none(aqs_linkage *L)
     L->s.rounding = L->s.rounding_rel = INFINITY;
     L->s.certified = 0;
 }
+
+double rounding_coeff_level(const aqs_linkage *L, int32_t n)
+{
+    const tree *t = &L->t;
+    return t->rnd_node ? maxd(RN(t, &t->nodes[n])[RND_K], RN(t, &t->nodes[n])[RND_KB]) : 0.0;
+}

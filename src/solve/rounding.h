@@ -37,6 +37,10 @@ void rounding_backsub(aqs_linkage *L, int32_t n, int counted);
 /* After a solve or refine: the queued nodes' uncomputed joints, then
  * L->s.rounding and L->s.certified for the measure in force. */
 void rounding_finish(aqs_linkage *L);
+/* The relative level of node n's coefficients (the larger of its reduced
+ * factors' and its b's): they carry about RND_SAFETY u times it of error;
+ * 0 where no levels are kept. */
+double rounding_coeff_level(const aqs_linkage *L, int32_t n);
 /* A solve whose rounding is not estimated (the articulated-body algorithm):
  * rounding = +inf, certified = 0. */
 void rounding_none(aqs_linkage *L);
