@@ -227,7 +227,7 @@ static void test_joint_types(void **state)
         aqs_linkage *L, *X;
         uint64_t r2 = rng;
         int32_t nv, nj, j, e, mi;
-        double fe = 0.0, fex = 0.0, fmaxall = 0.0;
+        double fe = 0.0, fec = 0.0, fex = 0.0, fmaxall = 0.0;
         double *ref, *q, *qx, *fref, *f, *fx;
         L = test_mixed_tree(&rng, 60, k % 2, 4, 1e2);
         X = test_mixed_tree(&r2, 60, k % 2, 4, 1e2);
@@ -265,10 +265,14 @@ static void test_joint_types(void **state)
                 assert_int_equal(aqs_linkage_get_constraint_forces(X, fx, 6 * (size_t)nj), AQS_OK);
                 for (j = 0; j < 6 * nj; j++) /* every force the solve gave (computed joints, reached welds) */
                     if (!isnan(f[j])) {
-                        assert_false(isnan(fx[j]));
                         fe = fmax(fe, fabs(f[j] - fref[j]));
-                        fex = fmax(fex, fabs(fx[j] - fref[j]));
                         nf++;
+                        /* the twin computed it too, unless the refinement
+                         * processed lossy queued nodes first (open_lossy) */
+                        if (!isnan(fx[j])) {
+                            fec = fmax(fec, fabs(f[j] - fref[j]));
+                            fex = fmax(fex, fabs(fx[j] - fref[j]));
+                        }
                     }
                 for (j = 0; j < nj; j++) {
                     int32_t c, off, n, i;
@@ -292,7 +296,7 @@ static void test_joint_types(void **state)
          * largest here, refined or not (the trees are benign: the corrections
          * are at the rounding level); not worse than unrefined */
         assert_true(fe <= 1e-10 * fmaxall);
-        assert_true(fe <= 2.0 * fex + 1e-15 * fmaxall);
+        assert_true(fec <= 2.0 * fex + 1e-15 * fmaxall);
         free(ref), free(q), free(qx), free(fref), free(f), free(fx);
         aqs_linkage_destroy(L);
         aqs_linkage_destroy(X);

@@ -369,7 +369,8 @@ static void requeue(aqs_linkage *L, heap *h)
 /* Before the refinement: the queued nodes whose coefficients the rounding
  * levels say carry more than the refinement's level of error are processed,
  * their children queued in their place, down to nodes whose coefficients do
- * not (leaves are exact). The refinement corrects the processed nodes
+ * not (leaves are exact), at the refinement's level or its default,
+ * whichever is larger. The refinement corrects the processed nodes
  * against the queued ones' coefficients (a = Phi x + b): an error in those
  * stays in the computed joints' forces (random trees of every joint type,
  * masses 1e-3 .. 1e3: a queued node's b at level 7.5e5 left the forces of
@@ -379,7 +380,9 @@ static void requeue(aqs_linkage *L, heap *h)
 static int32_t open_lossy(aqs_linkage *L, heap *h)
 {
     solve_state *s = &L->s;
-    const double lim = L->arf_level / (RND_SAFETY * RND_U);
+    /* the refinement's level, but not below its default: a level set to
+     * refine every solve would otherwise process every node */
+    const double lim = fmax(L->arf_level, AQS_ADAPTIVE_REFINEMENT_LEVEL) / (RND_SAFETY * RND_U);
     int32_t i = 0, opened = 0;
     while (i < h->size) {
         int32_t n = h->item[i], kids[2], nk;
