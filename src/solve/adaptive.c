@@ -366,19 +366,45 @@ static void requeue(aqs_linkage *L, heap *h)
     resum(L, h);
 }
 
-/* Before the refinement: the queued nodes whose coefficients the rounding
- * levels say carry more than the refinement's level of error are processed,
- * their children queued in their place, down to nodes whose coefficients do
- * not (leaves are exact), at the refinement's level or its default,
- * whichever is larger. The refinement corrects the processed nodes
- * against the queued ones' coefficients (a = Phi x + b): an error in those
- * stays in the computed joints (light distal links behind a queued
- * heavy-light junction: up to 3,400x the ABA's error, now 33x; random trees
- * of every joint type, masses 1e-3 .. 1e3: a queued node's b at level 7.5e5,
- * the 7 computed joints' forces 3.5e-12 of the largest off, now 9.6e-13,
- * still 150x the ABA's: processing down to level 1e-13 did not lower it
- * further, so that loss is not only the queued coefficients'). The
- * list h->item is changed in place; the caller rebuilds the heap
+/* The cancellation in a queued node's handle accelerations a = Phi x + b
+ * from its handle forces: the largest of their terms' magnitudes over the
+ * largest |a| (rows weighed as motion vectors, v by 1/l); +inf where a is 0
+ * and a term is not, 0 where it cannot be formed (more than AQS_CANC_MAXH
+ * handles, or no I^-1: such a node is left as it is). */
+#define AQS_CANC_MAXH 16
+static double handle_cancellation(const aqs_linkage *L, int32_t n)
+{
+    const node *nd = &L->t.nodes[n];
+    const double il = L->m.length > 0.0 ? 1.0 / L->m.length : 1.0;
+    double a[6 * AQS_CANC_MAXH], m[6 * AQS_CANC_MAXH], am = 0.0, mm = 0.0;
+    int32_t i;
+    if (nd->nh > AQS_CANC_MAXH || dca_handle_accels_mag(L, n, a, m) != 0) return 0.0;
+    for (i = 0; i < 6 * nd->nh; i++) {
+        const double w = i % 6 < 3 ? 1.0 : il;
+        am = fmax(am, fabs(a[i]) * w);
+        mm = fmax(mm, m[i] * w);
+    }
+    return am > 0.0 ? mm / am : (mm > 0.0 ? INFINITY : 0.0);
+}
+
+/* Before the refinement: the queued nodes that would leave their error in
+ * the computed joints are processed, their children queued in their place,
+ * down to nodes that would not (leaves are exact). The refinement corrects
+ * the processed nodes against the queued ones' handle accelerations
+ * a = Phi x + b, taken as they are, so what those carry stays in the
+ * computed joints. Two kinds, each against the refinement's level or its
+ * default, whichever is larger, as RND_SAFETY u times a ratio:
+ * - coefficients the rounding levels call lossy (the larger of the node's
+ *   levels of its reduced factors and of its b): light distal links behind
+ *   a queued heavy-light junction, up to 3,400x the ABA's error, now 33x;
+ * - handle accelerations that cancel (handle_cancellation): a light body
+ *   between the ground and heavy children, in equilibrium between large
+ *   handle forces (random trees of every joint type, masses 1e-3 .. 1e3:
+ *   a 1 g body on a planar joint, terms 5.9e6 for accelerations of 2; the
+ *   computed joints' forces 3.5e-12 of the largest off, 540x the ABA's;
+ *   processing that one node: 1.4e-15). Its rounding levels were 50: the
+ *   loss is in evaluating a, not in the coefficients.
+ * The list h->item is changed in place; the caller rebuilds the heap
  * (requeue). Returns the nodes processed. */
 static int32_t open_lossy(aqs_linkage *L, heap *h)
 {
@@ -389,7 +415,8 @@ static int32_t open_lossy(aqs_linkage *L, heap *h)
     int32_t i = 0, opened = 0;
     while (i < h->size) {
         int32_t n = h->item[i], kids[2], nk;
-        if (!(rounding_coeff_level(L, n) > lim) || (s->max_computed > 0 && s->computed >= s->max_computed)) {
+        if ((s->max_computed > 0 && s->computed >= s->max_computed) ||
+            !(rounding_coeff_level(L, n) > lim || handle_cancellation(L, n) > lim)) {
             i++;
             continue;
         }

@@ -2047,6 +2047,11 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out)
  * grounded). Returns 0, or -1 when the mass properties have no inverse. */
 int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a)
 {
+    return dca_handle_accels_mag(L, n, a, NULL);
+}
+
+int dca_handle_accels_mag(const aqs_linkage *L, int32_t n, double *a, double *mag)
+{
     const tree *t = &L->t;
     const node *nd = &t->nodes[n];
     const double *b = t->data + nd->bv, *x = t->data + nd_xf(nd);
@@ -2054,6 +2059,8 @@ int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a)
     const int32_t rows = 6 * nd->nh;
     int32_t i, j, c;
     memcpy(a, b, (size_t)rows * sizeof(double));
+    if (mag)
+        for (i = 0; i < rows; i++) mag[i] = fabs(b[i]);
     if (!nd->grounded) {
         double w[6] = {0, 0, 0, 0, 0, 0}, tmp[6], acc[6], Y[36];
         for (j = 0; j < nd->nh; j++) {
@@ -2071,13 +2078,19 @@ int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a)
         for (j = 0; j < nd->nh; j++) {
             spatial_xform_motion(&P[j], acc, tmp);
             for (i = 0; i < 6; i++) a[6 * j + i] += tmp[i];
+            if (mag)
+                for (i = 0; i < 6; i++) mag[6 * j + i] += fabs(tmp[i]);
         }
     }
     for (c = 0; c < nd->rank; c++) {
         const double *lam = t->data + nd_lam(nd) + c;
-        double s = 0.0;
+        double s = 0.0, sa = 0.0;
         for (i = 0; i < rows; i++) s += lam[(int64_t)i * nd->lld] * x[i];
         for (i = 0; i < rows; i++) a[i] += lam[(int64_t)i * nd->lld] * s;
+        if (mag) {
+            for (i = 0; i < rows; i++) sa += fabs(lam[(int64_t)i * nd->lld] * x[i]);
+            for (i = 0; i < rows; i++) mag[i] += fabs(lam[(int64_t)i * nd->lld]) * sa;
+        }
     }
     return 0;
 }

@@ -43,6 +43,10 @@ void dca_um_row(const aqs_linkage *L, int32_t n, int32_t r, double *out);
  * handle forces, each in its handle's frame (square-root form). 0, or -1 if
  * I^-1 does not exist. */
 int dca_handle_accels(const aqs_linkage *L, int32_t n, double *a);
+/* The same, with in mag (6 nh, when not NULL) the magnitude of each entry's
+ * terms: |b| + |the rigid part| + sum_c |lam_c| sum_i |lam_ic x_i| (an
+ * entry's rounding is about u times it). */
+int dca_handle_accels_mag(const aqs_linkage *L, int32_t n, double *a, double *mag);
 /* Internal node: from its handle forces x, the principal joint's
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces: qdd = rho - QX x, f = gamma + FX x. */
