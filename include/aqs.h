@@ -587,9 +587,10 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage,
  *  aqs_linkage_set_exact_refinement's count (0 turns both off; docs/math.md
  *  §13c). It repairs the rounding of the computed joints' own assembly and
  *  back-substitution, not that of a skipped subtree's coefficients; skipped
- *  subtrees whose coefficients the estimate calls lossy (above level, or
- *  above the default level when level is lower) are computed first, so a
- *  refined solve may compute more joints than its bound needs. Only in
+ *  subtrees whose coefficients the estimate calls lossy, or whose handle
+ *  accelerations cancel (above level, or above the default level when level
+ *  is lower), are computed first, so a refined solve may compute more
+ *  joints than its bound needs. Only in
  *  the square-root DCA form and under the four joint measures; not when the
  *  rounding fallback answers the solve (it still sees the unrefined
  *  estimate).
