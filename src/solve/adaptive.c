@@ -450,6 +450,9 @@ static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
     if (from_solve && (h->size == 0 || (L->rfb_level > 0.0 && s->max_computed == 0 &&
                                         !(s->rounding_rel <= L->rfb_level))))
         return;
+    /* out of memory: the solve as it is (no node processed for a refinement
+     * that cannot run; the next solve tries again) */
+    if (arefine_alloc(L) != 0) return;
     pre_r = s->rounding;
     pre_rel = s->rounding_rel;
     pre_cert = s->certified;

@@ -284,7 +284,7 @@ void arefine_free(aqs_linkage *L)
 
 /* The arrays, at the first solve that refines. Returns 0, or -1 when out of
  * memory (nothing kept: that solve is returned unrefined). */
-static int arefine_alloc(aqs_linkage *L)
+int arefine_alloc(aqs_linkage *L)
 {
     const tree *t = &L->t;
     struct arefine *R;

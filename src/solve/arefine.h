@@ -22,6 +22,9 @@
  * corrections kept (0: nothing changed; also when out of memory, and the next
  * call tries again). */
 int32_t arefine_solve(aqs_linkage *L, int *converged);
+/* The refinement's arrays (and the nodes' load factors), if not held yet.
+ * Returns 0, or -1 when out of memory (nothing kept). */
+int arefine_alloc(aqs_linkage *L);
 void arefine_free(aqs_linkage *L);
 
 #endif
