@@ -939,8 +939,11 @@ class Linkage:
         solve whose rounding estimate, relative as for set_rounding_fallback,
         exceeds level has its computed joints refined by the DCA on the nodes
         it back-substituted (at most exact_refinement corrections, each kept
-        only when it lowers the reduced residual). level >= 0; 0 turns it
-        off. Square-root DCA form and joint measures only. Any phase."""
+        only when it lowers the reduced residual); skipped subtrees whose
+        coefficients are lossy or whose handle accelerations cancel are
+        computed first, so such a solve may compute more joints than its
+        bound needs. level >= 0; 0 turns it off. Square-root DCA form and
+        joint measures only. Any phase."""
         f = "aqs_linkage_set_adaptive_refinement"
         self._call(f, _number(level, f, "level"))
 
