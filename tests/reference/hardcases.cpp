@@ -876,10 +876,8 @@ double force_err(const aqs_linkage *l, const std::vector<double> &fref, const st
             if (!computed || (*computed)[j]) return NAN;
             continue;
         }
-        if (getenv("DBGF") && std::sqrt(d2) > 1e-9) std::fprintf(stderr, "  dbg joint %zu err %.3e ref %.3e f %.6e %.6e %.6e %.6e %.6e %.6e\n", j, std::sqrt(d2), std::sqrt(r2), f[6*j],f[6*j+1],f[6*j+2],f[6*j+3],f[6*j+4],f[6*j+5]);
         dm = std::max(dm, std::sqrt(d2));
     }
-    if (getenv("DBGF")) std::fprintf(stderr, "  dbg max ref %.3e\n", rm);
     return dm / (rm > 0 ? rm : 1);
 }
 // The measure `metric` of the error x - ref over counted joints (all = true) or of ref over
