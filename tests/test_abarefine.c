@@ -15,6 +15,7 @@
  * hardcases.cpp, families armchain and jtypes: 1.4e-16 .. 5.0e-16). */
 #include "testutil.h"
 #include "randtree.h"
+#include "refinetest.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -28,17 +29,14 @@
  * gravity (0, -9.81, 0). */
 static aqs_linkage *armchain_in(counting_state *cs, int n)
 {
-    aqs_linkage *L = NULL;
+    aqs_linkage *L;
     const double com[3] = {0.5, 0, 0}, quat[4] = {1, 0, 0, 0}, g[3] = {0, -9.81, 0};
     const double axes[3][3] = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}}, ob[3] = {0, 0.70710678118654752, 0.70710678118654752};
     const double Ia[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Ic[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1};
     double *q = calloc((size_t)n + 3, sizeof *q);
     int32_t prev = AQS_WORLD, i, b;
     assert_non_null(q);
-    if (cs)
-        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
-    else
-        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    L = test_new_linkage_in(cs);
     for (i = 0; i < n + 3; i++) {
         const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
         assert_int_equal(aqs_body_add(L, i < 3 ? 10.0 : 1.0, com, i < 3 ? Ia : Ic, &b), AQS_OK);
@@ -212,29 +210,16 @@ static void test_out_of_memory(void **state)
 {
     counting_state cs;
     aqs_linkage *L, *X = armchain_in(NULL, 200);
-    double q0[203], q1[203], f[6 * 203];
-    long k, live;
+    double q0[203], f[6 * 203];
     (void)state;
     memset(&cs, 0, sizeof cs);
     L = armchain_in(&cs, 200);
     solve_with(X, 0, AQS_EXACT_ABA, q0, f);
     assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-    for (k = 1; k <= 6; k++) {
-        live = cs.live;
-        cs.fail_at = cs.count + k;
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_true(cs.count >= cs.fail_at); /* the failing allocation was reached */
-        assert_int_equal(L->s.refined, 0);
-        assert_int_equal(cs.live, live);
-        assert_int_equal(aqs_linkage_get_accelerations(L, q1, 203), AQS_OK);
-        assert_memory_equal(q0, q1, sizeof q0);
+    {
+        const test_oom o = {L, &cs, &L->s.refined, q0, 203, 0};
+        test_oom_each(&o, 6);
     }
-    cs.fail_at = 0;
-    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-    assert_true(L->s.refined >= 1);
-    assert_true(cs.live > live);
-    assert_int_equal(aqs_linkage_get_accelerations(L, q1, 203), AQS_OK);
-    assert_true(memcmp(q0, q1, sizeof q0) != 0);
     aqs_linkage_destroy(L);
     aqs_linkage_destroy(X);
     assert_int_equal(cs.live, 0);

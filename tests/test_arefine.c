@@ -21,7 +21,9 @@
  * (tests/reference/hardcases.cpp: light distal links 1.3e-16 .. 4e-16,
  * altmass r = 1e6 5e-16 .. 1e-15). */
 #include "testutil.h"
+#include "chains.h"
 #include "randtree.h"
+#include "refinetest.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -32,54 +34,58 @@
 static const int32_t kMetrics[4] = {AQS_METRIC_ABS_LINKAGE, AQS_METRIC_REL_LINKAGE, AQS_METRIC_ABS_JOINT,
                                     AQS_METRIC_REL_JOINT};
 
-/* A chain of n revolute links (axes alternating z and y, centre of mass at
- * 0.5 m, inertias 0.01 m, 0.1 m, 0.1 m), link i of mass mass(i); gravity g,
- * positions uniform in (-amp, amp). With cs, the counting allocator. */
-static aqs_linkage *chain_in(counting_state *cs, int n, int light_from, double mu, double ratio, const double g[3],
-                             double amp, uint64_t seed)
+/* hardcases' lightdistal: 40 links (tests/support/chains.h), the first 20 of
+ * 1000 kg, the others of mu, under gravity -z at positions uniform in
+ * (-1, 1), a load mu along y at the last link's end; the automatic path off.
+ * With cs, the counting allocator. */
+static aqs_linkage *lightdistal_in(counting_state *cs, double mu, uint64_t seed)
 {
-    aqs_linkage *L = NULL;
-    const double com[3] = {0.5, 0.0, 0.0}, quat[4] = {1, 0, 0, 0}, az[3] = {0, 0, 1}, ay[3] = {0, 1, 0};
-    double *q = calloc((size_t)n, sizeof *q);
-    int32_t prev = AQS_WORLD, i, b;
-    assert_non_null(q);
-    if (cs)
-        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
-    else
-        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
-    for (i = 0; i < n; i++) {
-        /* light_from >= 0: links from light_from on weigh mu, the others 1000 kg
-         * (hardcases' lightdistal); else masses alternate 1 and ratio (altmass) */
-        const double m = light_from >= 0 ? (i < light_from ? 1000.0 : mu) : (i % 2 ? ratio : 1.0);
-        const double I[9] = {0.01 * m, 0, 0, 0, 0.1 * m, 0, 0, 0, 0.1 * m};
-        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
-        assert_int_equal(aqs_body_add(L, m, com, I, &b), AQS_OK);
-        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, prev, b, pos, quat, i % 2 ? ay : az, NULL), AQS_OK);
-        prev = b;
+    const double g[3] = {0, 0, -9.81}, f[3] = {0, mu, 0}, pt[3] = {1, 0, 0};
+    double m[40], q[40];
+    aqs_linkage *L;
+    int32_t i;
+    for (i = 0; i < 40; i++) {
+        m[i] = i < 20 ? 1000.0 : mu;
+        q[i] = test_uniform(&seed, -1.0, 1.0);
     }
-    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
-    for (i = 0; i < n; i++) q[i] = test_uniform(&seed, -amp, amp);
-    assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)n), AQS_OK);
-    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-    if (light_from >= 0) {
-        const double f[3] = {0, mu, 0}, pt[3] = {1, 0, 0};
-        assert_int_equal(aqs_body_set_force(L, prev, f, pt, NULL), AQS_OK);
-    }
+    L = test_zy_chain(cs, 40, m, 0, q, g);
+    assert_int_equal(aqs_body_set_force(L, 39, f, pt, NULL), AQS_OK); /* no welded bodies: link i is body i */
     assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
-    free(q);
     return L;
 }
 
 static aqs_linkage *lightdistal(double mu, uint64_t seed)
 {
-    const double g[3] = {0, 0, -9.81};
-    return chain_in(NULL, 40, 20, mu, 0.0, g, 1.0, seed);
+    return lightdistal_in(NULL, mu, seed);
 }
 
+/* hardcases' altmass (tests/support/chains.h), the automatic path off. */
 static aqs_linkage *altmass(int n, double ratio, uint64_t seed)
 {
-    const double g[3] = {9.81, 0, 0};
-    return chain_in(NULL, n, -1, 0.0, ratio, g, 0.5, seed);
+    aqs_linkage *L = test_altmass_chain(NULL, n, ratio, 0, seed);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    return L;
+}
+
+/* Over L's computed joints (one dof per joint here): the largest difference
+ * of qdd from ref, their count into *ncomp; the largest |ref| of all joints
+ * into *m. */
+static double computed_diff(const aqs_linkage *L, const double *qdd, const double *ref, int32_t nv, int32_t *ncomp,
+                            double *m)
+{
+    double e = 0.0;
+    int32_t j;
+    *ncomp = 0, *m = 0.0;
+    for (j = 0; j < nv; j++) {
+        int32_t c;
+        assert_int_equal(aqs_joint_get_computed(L, j, &c), AQS_OK);
+        *m = fmax(*m, fabs(ref[j]));
+        if (c) {
+            (*ncomp)++;
+            e = fmax(e, fabs(qdd[j] - ref[j]));
+        }
+    }
+    return e;
 }
 
 /* The largest difference over the computed joints (relative to the largest
@@ -88,18 +94,14 @@ static aqs_linkage *altmass(int n, double ratio, uint64_t seed)
 static double computed_error(const aqs_linkage *L, const double *qdd, const double *ref, int32_t nv, int32_t *ncomp,
                              int32_t metric, double *skipped)
 {
-    double e = 0.0, m = 0.0, s2 = 0.0, smax = 0.0, all2 = 0.0;
+    double m, s2 = 0.0, smax = 0.0, all2 = 0.0;
+    const double e = computed_diff(L, qdd, ref, nv, ncomp, &m);
     int32_t j;
-    *ncomp = 0;
-    for (j = 0; j < nv; j++) m = fmax(m, fabs(ref[j]));
     for (j = 0; j < nv; j++) { /* one dof per joint here */
         int32_t c;
         assert_int_equal(aqs_joint_get_computed(L, j, &c), AQS_OK);
         all2 += ref[j] * ref[j];
-        if (c) {
-            (*ncomp)++;
-            e = fmax(e, fabs(qdd[j] - ref[j]));
-        } else {
+        if (!c) {
             s2 += ref[j] * ref[j];
             smax = fmax(smax, fabs(ref[j]));
         }
@@ -111,6 +113,15 @@ static double computed_error(const aqs_linkage *L, const double *qdd, const doub
     default: *skipped = smax / m; break;
     }
     return e / m;
+}
+
+/* L (refinement on) and its twin X: X's refinement off, the rounding
+ * fallback off in both (it would answer these families with the ABA). */
+static void unrefined_twin(aqs_linkage *L, aqs_linkage *X)
+{
+    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
+    assert_int_equal(aqs_linkage_set_adaptive_refinement(X, 0.0), AQS_OK);
 }
 
 /* L (refinement on, the default) and its twin X (off), the rounding fallback
@@ -132,9 +143,7 @@ static void refined_vs_off(aqs_linkage *L, aqs_linkage *X, const char *what, dou
     assert_int_equal(aqs_linkage_get_accelerations(L, ref, (size_t)nv), AQS_OK);
     assert_int_equal(aqs_linkage_get_constraint_forces(L, fref, 6 * (size_t)nv), AQS_OK);
     for (j = 0; j < 6 * nv; j++) fm = fmax(fm, fabs(fref[j]));
-    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_adaptive_refinement(X, 0.0), AQS_OK);
+    unrefined_twin(L, X);
     *worst_on = *worst_off = *worst_f = *worst_fx = 0.0;
     for (mi = 0; mi < 4; mi++)
         for (e = 1; e <= 10; e += e < 4 ? 3 : 6) {
@@ -246,10 +255,8 @@ static void test_joint_types(void **state)
         for (j = 0; j < 6 * nj; j++) fmaxall = fmax(fmaxall, fabs(fref[j]));
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(X, 0), AQS_OK);
-        assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
-        assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
+        unrefined_twin(L, X);
         assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 1e-300), AQS_OK);
-        assert_int_equal(aqs_linkage_set_adaptive_refinement(X, 0.0), AQS_OK);
         for (mi = 0; mi < 4; mi++)
             for (e = 2; e <= 12; e += 5) {
                 double d2 = 0.0, dx2 = 0.0, r2n = 0.0;
@@ -315,9 +322,7 @@ static void test_state_restored(void **state)
     aqs_linkage *A = lightdistal(1e-9, 5), *B = lightdistal(1e-9, 5);
     double qa[40], qb[40];
     (void)state;
-    assert_int_equal(aqs_linkage_set_adaptive_refinement(B, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_rounding_fallback(A, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_rounding_fallback(B, 0.0), AQS_OK);
+    unrefined_twin(A, B);
     assert_int_equal(aqs_linkage_set_tolerance(A, AQS_METRIC_REL_JOINT, 0.01), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(B, AQS_METRIC_REL_JOINT, 0.01), AQS_OK);
     assert_int_equal(aqs_linkage_solve(A), AQS_OK);
@@ -358,8 +363,8 @@ static void test_moving(void **state)
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.05), AQS_OK);
     for (k = 0; k < 12; k++) {
         const int32_t j = (int32_t)test_uniform(&rng, 0.0, 40.0);
-        double v = test_uniform(&rng, -1.0, 1.0), m = 0.0, e = 0.0;
-        int32_t i, nc = 0;
+        double v = test_uniform(&rng, -1.0, 1.0), m, e;
+        int32_t nc;
         assert_int_equal(aqs_joint_set_position(L, j, &v, 1), AQS_OK);
         assert_int_equal(aqs_linkage_solve(L), AQS_OK);
         assert_true(L->s.arefined >= 1);
@@ -368,15 +373,7 @@ static void test_moving(void **state)
         assert_int_equal(aqs_linkage_solve(C), AQS_OK);
         assert_int_equal(aqs_linkage_get_accelerations(C, ref, 40), AQS_OK);
         assert_int_equal(aqs_linkage_get_accelerations(L, qd, 40), AQS_OK);
-        for (i = 0; i < 40; i++) {
-            int32_t c;
-            assert_int_equal(aqs_joint_get_computed(L, i, &c), AQS_OK);
-            m = fmax(m, fabs(ref[i]));
-            if (c) {
-                nc++;
-                e = fmax(e, fabs(qd[i] - ref[i]));
-            }
-        }
+        e = computed_diff(L, qd, ref, 40, &nc, &m);
         assert_true(nc > 0 && nc < 40);
         assert_true(e <= 1e-14 * m);
     }
@@ -391,9 +388,9 @@ static void test_moving(void **state)
 static void test_continue_and_fallback(void **state)
 {
     aqs_linkage *L = lightdistal(1e-9, 3), *A = altmass(100, 1e6, 2);
-    double ref[40], q[40], m = 0.0, e = 0.0;
+    double ref[40], q[40], m, e;
     aqs_solve_stats st;
-    int32_t i, n1, n2 = 0;
+    int32_t i, n1, n2;
     (void)state;
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(L, ref, 40), AQS_OK);
@@ -408,15 +405,7 @@ static void test_continue_and_fallback(void **state)
     assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
     assert_true(st.computed_joints > n1 && st.computed_joints < 40);
     assert_int_equal(aqs_linkage_get_accelerations(L, q, 40), AQS_OK);
-    for (i = 0; i < 40; i++) {
-        int32_t c;
-        assert_int_equal(aqs_joint_get_computed(L, i, &c), AQS_OK);
-        m = fmax(m, fabs(ref[i]));
-        if (c) {
-            n2++;
-            e = fmax(e, fabs(q[i] - ref[i]));
-        }
-    }
+    e = computed_diff(L, q, ref, 40, &n2, &m);
     assert_int_equal(n2, st.computed_joints);
     assert_true(e <= 1e-14 * m);
     /* down to every joint: refined too (aqs_linkage_refine has no exact
@@ -478,16 +467,13 @@ static void test_setting(void **state)
 static void test_out_of_memory(void **state)
 {
     counting_state cs;
-    const double g[3] = {0, 0, -9.81};
     aqs_linkage *L, *X = lightdistal(1e-9, 4);
-    double q0[40], q1[40];
+    double q0[40];
     long k, live = 0;
     (void)state;
     memset(&cs, 0, sizeof cs);
-    L = chain_in(&cs, 40, 20, 1e-9, 0.0, g, 1.0, 4);
-    assert_int_equal(aqs_linkage_set_rounding_fallback(L, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_rounding_fallback(X, 0.0), AQS_OK);
-    assert_int_equal(aqs_linkage_set_adaptive_refinement(X, 0.0), AQS_OK);
+    L = lightdistal_in(&cs, 1e-9, 4);
+    unrefined_twin(L, X);
     assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
     assert_int_equal(aqs_linkage_set_tolerance(X, AQS_METRIC_REL_JOINT, 0.5), AQS_OK);
     assert_int_equal(aqs_linkage_solve(X), AQS_OK);
@@ -495,27 +481,20 @@ static void test_out_of_memory(void **state)
     assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 0.0), AQS_OK);
     assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the DCA's own arrays, first */
     assert_int_equal(aqs_linkage_set_adaptive_refinement(L, AQS_ADAPTIVE_REFINEMENT_LEVEL), AQS_OK);
-    /* dca_loads_enable's three blocks (each failure frees the others), then
-     * arefine_alloc's first (the load factors kept from then on), then its
-     * other ten with the load factors there */
-    for (k = 0; k < 14; k++) {
-        static const long fail[14] = {1, 2, 3, 4, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
-        live = cs.live;
-        cs.fail_at = cs.count + fail[k];
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_true(cs.count >= cs.fail_at);
-        assert_int_equal(L->s.arefined, 0);
-        assert_int_equal(L->s.computed, X->s.computed);
-        assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
-        assert_memory_equal(q0, q1, sizeof q0);
+    {
+        /* the load factors a failed solve allocated before the failure are kept */
+        const test_oom o = {L, &cs, &L->s.arefined, q0, 40, 1};
+        /* dca_loads_enable's three blocks (each failure frees the others), then
+         * arefine_alloc's first (the load factors kept from then on), then its
+         * other ten with the load factors there */
+        for (k = 0; k < 14; k++) {
+            static const long fail[14] = {1, 2, 3, 4, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+            live = test_oom_unrefined(&o, fail[k]);
+            assert_int_equal(L->s.computed, X->s.computed);
+        }
+        test_oom_refined(&o, live);
+        assert_true(L->s.computed > X->s.computed);
     }
-    cs.fail_at = 0;
-    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-    assert_true(L->s.arefined >= 1);
-    assert_true(L->s.computed > X->s.computed);
-    assert_true(cs.live > live);
-    assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
-    assert_true(memcmp(q0, q1, sizeof q0) != 0);
     aqs_linkage_destroy(L);
     aqs_linkage_destroy(X);
     assert_int_equal(cs.live, 0);

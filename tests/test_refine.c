@@ -20,7 +20,9 @@
  * within 1e-15 of a __float128 reference on these families
  * (tests/reference/hardcases.cpp: altmass r = 1e6, ABA 5e-16 .. 1e-15). */
 #include "testutil.h"
+#include "chains.h"
 #include "randtree.h"
+#include "refinetest.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -94,48 +96,10 @@ static void test_residual_of_aba(void **state)
     }
 }
 
-/* n links, masses alternating 1 and ratio (hardcases' altmass: centre of
- * mass at 0.5 m, inertias 0.01 m, 0.1 m, 0.1 m, axes alternating z and y),
- * hanging under gravity along x at random angles; with weld, a 0.3 kg body
- * welded to every third link. With cs, the linkage's allocator is the
- * counting one of tests/support (else malloc). */
-static aqs_linkage *altmass_in(counting_state *cs, int n, double ratio, int weld, uint64_t seed)
-{
-    aqs_linkage *L = NULL;
-    const double com[3] = {0.5, 0.0, 0.0}, quat[4] = {1, 0, 0, 0}, g[3] = {9.81, 0, 0};
-    const double az[3] = {0, 0, 1}, ay[3] = {0, 1, 0};
-    double *q = calloc((size_t)n, sizeof *q);
-    int32_t prev = AQS_WORLD, i, b;
-    assert_non_null(q);
-    if (cs)
-        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
-    else
-        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
-    for (i = 0; i < n; i++) {
-        const double m = i % 2 ? ratio : 1.0;
-        const double I[9] = {0.01 * m, 0, 0, 0, 0.1 * m, 0, 0, 0, 0.1 * m};
-        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
-        assert_int_equal(aqs_body_add(L, m, com, I, &b), AQS_OK);
-        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, prev, b, pos, quat, i % 2 ? ay : az, NULL), AQS_OK);
-        if (weld && i % 3 == 0) {
-            const double I2[9] = {0.01, 0, 0, 0, 0.02, 0, 0, 0, 0.03}, wpos[3] = {0.3, 0.1, 0};
-            int32_t w;
-            assert_int_equal(aqs_body_add(L, 0.3, com, I2, &w), AQS_OK);
-            assert_int_equal(aqs_joint_add(L, AQS_JOINT_FIXED, b, w, wpos, quat, NULL, NULL), AQS_OK);
-        }
-        prev = b;
-    }
-    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
-    for (i = 0; i < n; i++) q[i] = test_uniform(&seed, -0.5, 0.5);
-    assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)n), AQS_OK);
-    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
-    free(q);
-    return L;
-}
-
+/* hardcases' altmass (tests/support/chains.h), with malloc. */
 static aqs_linkage *altmass(int n, double ratio, int weld, uint64_t seed)
 {
-    return altmass_in(NULL, n, ratio, weld, seed);
+    return test_altmass_chain(NULL, n, ratio, weld, seed);
 }
 
 /* The ABA's answer (the default solver) into qa, fa, then the refined exact
@@ -438,11 +402,10 @@ static void test_out_of_memory(void **state)
 {
     counting_state cs;
     aqs_linkage *L, *X = altmass(40, 1e6, 0, 5);
-    double q0[40], q1[40];
-    long k, live;
+    double q0[40];
     (void)state;
     memset(&cs, 0, sizeof cs);
-    L = altmass_in(&cs, 40, 1e6, 0, 5);
+    L = test_altmass_chain(&cs, 40, 1e6, 0, 5);
     assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
     assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
     assert_int_equal(aqs_linkage_set_exact_solver(X, AQS_EXACT_DCA), AQS_OK);
@@ -450,22 +413,10 @@ static void test_out_of_memory(void **state)
     assert_int_equal(aqs_linkage_set_exact_refinement(X, 0), AQS_OK);
     assert_int_equal(aqs_linkage_solve(X), AQS_OK);
     assert_int_equal(aqs_linkage_get_accelerations(X, q0, 40), AQS_OK);
-    for (k = 1; k <= 8; k++) { /* refine_alloc's eight blocks */
-        live = cs.live;
-        cs.fail_at = cs.count + k;
-        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-        assert_true(cs.count >= cs.fail_at); /* the failing allocation was reached */
-        assert_int_equal(L->s.refined, 0);
-        assert_int_equal(cs.live, live);
-        assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
-        assert_memory_equal(q0, q1, sizeof q0);
+    {
+        const test_oom o = {L, &cs, &L->s.refined, q0, 40, 0};
+        test_oom_each(&o, 8); /* refine_alloc's eight blocks */
     }
-    cs.fail_at = 0;
-    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
-    assert_true(L->s.refined >= 1);
-    assert_true(cs.live > live);
-    assert_int_equal(aqs_linkage_get_accelerations(L, q1, 40), AQS_OK);
-    assert_true(memcmp(q0, q1, sizeof q0) != 0);
     aqs_linkage_destroy(L);
     aqs_linkage_destroy(X);
     assert_int_equal(cs.live, 0);
@@ -493,7 +444,7 @@ static void test_out_of_memory_forces(void **state)
         aqs_linkage *L;
         int failed;
         memset(&cs, 0, sizeof cs);
-        L = altmass_in(&cs, 40, 1e6, 1, 5);
+        L = test_altmass_chain(&cs, 40, 1e6, 1, 5);
         assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
         assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
         base = cs.count;

@@ -145,3 +145,13 @@ aqs_linkage *test_new_linkage(void)
     assert_non_null(L);
     return L;
 }
+
+aqs_linkage *test_new_linkage_in(counting_state *cs)
+{
+    aqs_linkage *L = NULL;
+    if (cs)
+        assert_int_equal(aqs_linkage_create_with_allocator(counting_alloc, counting_free, cs, &L), AQS_OK);
+    else
+        assert_int_equal(aqs_linkage_create(&L), AQS_OK);
+    return L;
+}

@@ -53,5 +53,8 @@ void test_random_quat(uint64_t *state, double q[4]);
 void test_assert_contains(const char *text, const char *needle);
 /* Create a linkage with malloc/free; asserts success. */
 aqs_linkage *test_new_linkage(void);
+/* Create a linkage whose allocator is the counting one, cs (malloc/free
+ * when cs is NULL); asserts success. */
+aqs_linkage *test_new_linkage_in(counting_state *cs);
 
 #endif
