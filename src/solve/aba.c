@@ -482,14 +482,17 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
  * the cost) show what the rounding of the articulated inertias left
  * unbalanced. Returned: max_c |b_c|_1 over max_c (|(I_c a_c)_lin|_1 +
  * m_c |g| + |f_e,lin|_1) (a free fall's forces are 0: its weights are the
- * scale). b_c is summed in pA (the backward pass's, read at c's turn
+ * scale), or over ABA_FORCE_SCALE max_e |f_e,lin|_1 where that is smaller
+ * and the joint forces are not below 2^-10 of that scale (a floating tree
+ * whose joint forces are small beside its weights loses digits in its
+ * forces that the terms' scale hides: docs/math.md §5b). b_c is summed in pA (the backward pass's, read at c's turn
  * before), then read and zeroed by a sweep after the pass. Without check,
  * 0 (pA zeroed as well). */
 static double forward(aqs_linkage *L, int check)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double g[6], tsum = 0.0, bmax = 0.0, gn;
+    double g[6], tsum = 0.0, bmax = 0.0, fmax = 0.0, gn;
     int32_t k, i;
     const int32_t ahead = prefetch_ahead(m->ne);
     for (i = 0; i < 3; i++) {
@@ -524,8 +527,10 @@ static double forward(aqs_linkage *L, int check)
             const double t3 = B[0] * ac[0] + B[3] * ac[1] + B[6] * ac[2] + C[0] * ac[3] + C[1] * ac[4] + C[2] * ac[5];
             const double t4 = B[1] * ac[0] + B[4] * ac[1] + B[7] * ac[2] + C[1] * ac[3] + C[3] * ac[4] + C[4] * ac[5];
             const double t5 = B[2] * ac[0] + B[5] * ac[1] + B[8] * ac[2] + C[2] * ac[3] + C[4] * ac[4] + C[5] * ac[5];
-            const double sc = fabs(t3) + fabs(t4) + fabs(t5) + C[0] * gn + fabs(f[3]) + fabs(f[4]) + fabs(f[5]);
+            const double fl = fabs(f[3]) + fabs(f[4]) + fabs(f[5]);
+            const double sc = fabs(t3) + fabs(t4) + fabs(t5) + C[0] * gn + fl;
             if (sc > tsum) tsum = sc;
+            if (fl > fmax) fmax = fl;
             b[0] = t3 - f[3];
             b[1] = t4 - f[4];
             b[2] = t5 - f[5];
@@ -554,6 +559,10 @@ static double forward(aqs_linkage *L, int check)
         memset(b, 0, 6 * sizeof(double)); /* ready for the next backward pass */
     }
     if (bmax != bmax) return NAN;
+    /* the scale: the largest term, or 16x the largest joint force where that
+     * is smaller, unless the joint forces are below 2^-10 of the terms (a
+     * free fall's are rounding noise) */
+    if (fmax >= 0x1p-10 * tsum && ABA_FORCE_SCALE * fmax < tsum) tsum = ABA_FORCE_SCALE * fmax;
     return tsum > 0.0 ? bmax / tsum : (bmax > 0.0 ? INFINITY : 0.0);
 }
 

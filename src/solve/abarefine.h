@@ -9,6 +9,12 @@
 /* The bodies' force balance (aba.c's forward pass), in units of u, above
  * which a solve is refined. */
 #define ABA_REFINE_LEVEL 16.0
+/* The balance is also measured against this multiple of the largest joint
+ * force (linear rows), where that is smaller than the largest term and not
+ * below 2^-10 of it: a balance above ABA_REFINE_LEVEL x ABA_FORCE_SCALE u
+ * (256 u) of the joint forces refines (docs/math.md §5b, "Against the joint
+ * forces"). */
+#define ABA_FORCE_SCALE 16.0
 
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): measure the residual and refine where it exceeds the
