@@ -265,6 +265,8 @@ typedef struct {
     double u, Dinv;   /* Q - S^T pA and 1 / (S^T U) (1-dof joints) */
 } aba_node;
 
+enum { ABA_LEAF = 1, ABA_LAST = 2 }; /* aba_state.kin */
+
 typedef struct {
     aba_joint *joint; /* ne, ABA order */
     aba_node *node;   /* ne, ABA order */
@@ -274,6 +276,8 @@ typedef struct {
     int32_t *moff;    /* ne: ABA position k's offset in um (multi-dof joints; NULL without) */
     double *x;        /* 6 x max handles: a welded composite's leaf handle forces */
     unsigned char *need; /* ne: the position's world pose was computed for the loads */
+    unsigned char *kin;  /* ne: ABA_LEAF (no child), ABA_LAST (its parent's last child in ABA
+                            order): where the forward pass's balance of forces is complete */
     int32_t *path;    /* ne: the positions marked in need, for the loads' world poses */
     int dirty;        /* a failed solve left IA / pA accumulated: reset them first */
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */

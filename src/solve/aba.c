@@ -57,11 +57,13 @@ aqs_status aba_alloc(aqs_linkage *L)
     a->pos_of_comp = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ncomp + 1, sizeof(int32_t));
     a->x = lk_calloc_in(L, LK_MEM_EXACT, 6 * (size_t)L->t.max_handles + 1, sizeof(double));
     a->need = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, 1);
+    a->kin = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, 1);
     a->path = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
     head = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ncomp + 2, sizeof(int32_t));
     next = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
     stack = lk_calloc_in(L, LK_MEM_EXACT, (size_t)m->ne + 1, sizeof(int32_t));
-    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !a->path || !head || !next || !stack) {
+    if (!a->joint || !a->node || !a->pos_of_comp || !a->x || !a->need || !a->kin || !a->path || !head || !next ||
+        !stack) {
         lk_free(L, head);
         lk_free(L, next);
         lk_free(L, stack);
@@ -97,6 +99,14 @@ aqs_status aba_alloc(aqs_linkage *L)
         }
         n++;
     }
+    /* the leaves and each position's parent's last child (next[]: the last
+     * child of each position, -1: none) */
+    for (i = 0; i < n; i++) next[i] = -1;
+    for (i = 0; i < n; i++)
+        if (a->joint[i].parent >= 0) next[a->joint[i].parent] = i;
+    for (i = 0; i < n; i++)
+        a->kin[i] = (unsigned char)((next[i] < 0 ? ABA_LEAF : 0) |
+                                    (a->joint[i].parent >= 0 && next[a->joint[i].parent] == i ? ABA_LAST : 0));
     lk_free(L, head);
     lk_free(L, next);
     lk_free(L, stack);
@@ -133,6 +143,7 @@ void aba_free(aqs_linkage *L)
     lk_free(L, a->moff);
     lk_free(L, a->x);
     lk_free(L, a->need);
+    lk_free(L, a->kin);
     lk_free(L, a->path);
     memset(a, 0, sizeof *a);
 }
@@ -485,15 +496,17 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
  * scale), or over ABA_FORCE_SCALE max_e |f_e,lin|_1 where that is smaller
  * and the joint forces are not below 2^-10 of that scale (a floating tree
  * whose joint forces are small beside its weights loses digits in its
- * forces that the terms' scale hides: docs/math.md §5b). b_c is summed in pA (the backward pass's, read at c's turn
- * before), then read and zeroed by a sweep after the pass. Without check,
- * 0 (pA zeroed as well). */
+ * forces that the terms' scale hides: docs/math.md §5b). b_c is summed in
+ * pA (the backward pass's, read at c's turn before) and read and zeroed
+ * where it is complete: at c's turn for a leaf, else at its last child's
+ * (aba_state.kin). Without check, 0 (pA zeroed as well). */
 static double forward(aqs_linkage *L, int check)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
     double g[6], tsum = 0.0, bmax = 0.0, fmax = 0.0, gn;
     int32_t k, i;
+    int bad = 0;
     const int32_t ahead = prefetch_ahead(m->ne);
     for (i = 0; i < 3; i++) {
         g[i] = 0.0;
@@ -531,6 +544,7 @@ static double forward(aqs_linkage *L, int check)
             const double sc = fabs(t3) + fabs(t4) + fabs(t5) + C[0] * gn + fl;
             if (sc > tsum) tsum = sc;
             if (fl > fmax) fmax = fl;
+            const unsigned char kin = a->kin[k];
             b[0] = t3 - f[3];
             b[1] = t4 - f[4];
             b[2] = t5 - f[5];
@@ -539,12 +553,24 @@ static double forward(aqs_linkage *L, int check)
                 a->need[k] = 0;
                 for (i = 0; i < 3; i++) b[i] -= fe[3 + i];
             }
+            if (kin & ABA_LEAF) { /* complete: no child adds to it */
+                const double v = fabs(b[0]) + fabs(b[1]) + fabs(b[2]);
+                if (v > bmax) bmax = v;
+                bad |= v != v;
+                memset(b, 0, sizeof nd->pA); /* ready for the next backward pass */
+            }
             if (jt->parent >= 0) {
                 const double *R = nd->X.R;
                 double *bp = a->node[jt->parent].pA;
                 bp[0] += R[0] * f[3] + R[1] * f[4] + R[2] * f[5];
                 bp[1] += R[3] * f[3] + R[4] * f[4] + R[5] * f[5];
                 bp[2] += R[6] * f[3] + R[7] * f[4] + R[8] * f[5];
+                if (kin & ABA_LAST) { /* the parent's balance is complete */
+                    const double v = fabs(bp[0]) + fabs(bp[1]) + fabs(bp[2]);
+                    if (v > bmax) bmax = v;
+                    bad |= v != v;
+                    memset(bp, 0, sizeof nd->pA);
+                }
             }
         } else {
             memset(b, 0, sizeof nd->pA); /* ready for the next backward pass */
@@ -552,13 +578,7 @@ static double forward(aqs_linkage *L, int check)
         memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
     }
     if (!check) return 0.0;
-    for (k = 0; k < m->ne; k++) {
-        double *b = a->node[k].pA;
-        const double v = fabs(b[0]) + fabs(b[1]) + fabs(b[2]);
-        if (!(v <= bmax)) bmax = v; /* NaN too */
-        memset(b, 0, 6 * sizeof(double)); /* ready for the next backward pass */
-    }
-    if (bmax != bmax) return NAN;
+    if (bad) return NAN;
     /* the scale: the largest term, or 16x the largest joint force where that
      * is smaller, unless the joint forces are below 2^-10 of the terms (a
      * free fall's are rounding noise) */
