@@ -927,8 +927,8 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *
  *  The articulated-body solve (docs/math.md 5b): its forward pass also
  *  checks each body's balance of forces (the body's inertial force and load
- *  against its joint forces, 0 in exact arithmetic; about 145 instructions
- *  a joint, +9 %, +12 .. 14 % time); where the largest imbalance is above 16 u of the largest
+ *  against its joint forces, 0 in exact arithmetic; about 155 instructions
+ *  a joint, +10 %); where the largest imbalance is above 16 u of the largest
  *  term or 256 u of the largest joint force (when the joint forces are not
  *  below 2^-10 of the terms, as a free fall's are) (it lost digits:
  *  spherical and planar joints between very different masses, up to 1.4e-9
