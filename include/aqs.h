@@ -927,14 +927,17 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *
  *  The articulated-body solve (docs/math.md 5b): its forward pass also
  *  checks each body's balance of forces (the body's inertial force and load
- *  against its joint forces, 0 in exact arithmetic; about 155 instructions
- *  a joint, +10 %); where the largest imbalance is above 16 u of the largest
+ *  against its joint forces, 0 in exact arithmetic) and each joint's own
+ *  equation S^T f = Q (about 185 instructions a joint, +12 %); where the largest imbalance is above 16 u of the largest
  *  term or 256 u of the largest joint force (when the joint forces are not
  *  below 2^-10 of the terms, as a free fall's are) (it lost digits:
  *  spherical and planar joints between very different masses, up to 1.4e-9
  *  off; a long planar chain held in an oblique frame, 4e-9 at 2,000 links;
  *  a floating tree whose joint forces are small beside its weights, forces
- *  1.4e-11 off), at most max_corrections corrections
+ *  1.4e-11 off), or where some joint's |Q - S^T f| is above 1,024 u of the
+ *  largest joint force (floating trees of very different masses under
+ *  tilted gravity, forces up to 3.6e-10 off while every body balanced), at
+ *  most max_corrections corrections
  *  qdd += ABA^-1(Q - ID(qdd)) by the solve's own factors, each kept only when
  *  it lowers the inverse-dynamics residual (2e-16 .. 5e-14 there); a solve
  *  that kept one takes the inverse dynamics' constraint forces of its

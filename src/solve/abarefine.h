@@ -15,6 +15,12 @@
  * (256 u) of the joint forces refines (docs/math.md §5b, "Against the joint
  * forces"). */
 #define ABA_FORCE_SCALE 16.0
+/* Each joint's Q - S^T f (f = I^A a + p^A, its force on the child, which
+ * satisfies S^T f = Q in exact arithmetic) is measured against this multiple
+ * of the largest joint force (where the joint forces are not below 2^-20 of
+ * the largest term): above ABA_REFINE_LEVEL x ABA_PROJ_SCALE u (1,024 u) the
+ * solve refines (docs/math.md §5b, "The joints' own equations"). */
+#define ABA_PROJ_SCALE 64.0
 
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): measure the residual and refine where it exceeds the

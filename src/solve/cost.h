@@ -36,8 +36,9 @@
 /* The exact solve by the articulated-body algorithm (aba_solve), per
  * effective joint: 1,520 until 2026-12-04, +145 (callgrind, exact_main on
  * the 5,000-joint molecule) for the forward pass's balance of forces
- * (docs/math.md §5b). */
-#define COST_ABA_JOINT 1660.0
+ * (docs/math.md §5b), +40 for its measures against the joint forces and the
+ * joints' own equations (1,711 -> 1,753 on the molecule, later the same day). */
+#define COST_ABA_JOINT 1700.0
 /* An exact step's move, per effective joint: joint_integrate, and
  * frames_all per joint. */
 #define COST_ABA_MOVE 40.0
