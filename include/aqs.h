@@ -579,7 +579,9 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage,
 
 /** Refinement of adaptive solves (on by default): an adaptive solve whose
  *  rounding estimate, relative as for the rounding fallback above, exceeds
- *  level (light parts behind heavy ones, tiny floating bases) has its
+ *  level (light parts behind heavy ones, tiny floating bases), or whose
+ *  estimated error of its computed joints' constraint forces exceeds level
+ *  times the largest of them, has its
  *  computed joints refined before it returns: corrections by the DCA on the
  *  nodes it back-substituted, with the residual of the linkage reduced to
  *  those joints (the skipped subtrees held by their coefficients) as their

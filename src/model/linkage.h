@@ -222,6 +222,9 @@ typedef struct {
     double rf_max;          /* the largest estimated error of the computed free joints, as
                                |(dw, dv / l)| (the world measures, src/solve/worldbound.c) */
     double rk_max;          /* largest relative error level met (units of u) */
+    double rfe_max, rfn_max; /* the computed joints' largest estimated constraint-force error and
+                               largest constraint force, |(n / l, f)| (the adaptive refinement's
+                               trigger, src/solve/adaptive.c) */
     int rnd_ok;             /* the estimate's storage exists (tree.rnd_x) */
     double rounding;        /* aqs_solve_stats.rounding_bound */
     double rounding_rel;    /* rounding relative to the solution's size in the measure (+inf: none) */

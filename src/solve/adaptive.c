@@ -441,7 +441,8 @@ static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
     rounding_finish(L);
     s->arefined = 0;
     if (!(L->arf_level > 0.0) || L->refine_max <= 0 || s->metric >= AQS_METRIC_ABS_WORLD || s->all ||
-        s->nprocessed == 0 || L->dca_form != AQS_DCA_FORM_SQRT || !(s->rounding_rel > L->arf_level))
+        s->nprocessed == 0 || L->dca_form != AQS_DCA_FORM_SQRT ||
+        !(s->rounding_rel > L->arf_level || s->rfe_max > L->arf_level * s->rfn_max))
         return;
     /* after a solve (api.c): with nothing queued every joint was computed and
      * the exact solve's refinement follows (refine_exact); with the estimate

@@ -333,7 +333,7 @@ void rounding_solve_start(aqs_linkage *L)
 {
     solve_state *s = &L->s;
     tree *t = &L->t;
-    s->rc_sq = s->rc_max = s->rk_max = s->rf_max = 0.0;
+    s->rc_sq = s->rc_max = s->rk_max = s->rf_max = s->rfe_max = s->rfn_max = 0.0;
     s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
@@ -398,10 +398,13 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
         /* f = gamma + FX x: each handle force's relative error carried by its
          * share FX_h x_h, plus the rounding; the children's handle k gets f
          * (its relative error kept through the transform), the others keep
-         * theirs (the order of dca_node_backsub) */
+         * theirs (the order of dca_node_backsub). The joint's own force error
+         * and size go into the solve's largest (the adaptive refinement's
+         * trigger: the estimate of the accelerations does not cover them). */
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const int all = worldbound_active(L), setA = all || A->joint >= 0, setB = all || B->joint >= 0;
-        if (setA || setB) {
+        {
+            const double fn = n6f(L->cforce + 6 * L->m.eff_joint[C->joint], il);
             double ef = RN(t, C)[RND_GAM], sf = n6f(t->data + nd_gamma(C), il), *exA = t->rnd_x + A->handles,
                    *exB = t->rnd_x + B->handles;
             int32_t ci;
@@ -420,8 +423,9 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 sf += vn;
             }
             ef += ku * sf;
+            L->s.rfe_max = maxd(L->s.rfe_max, ef);
+            L->s.rfn_max = maxd(L->s.rfn_max, fn);
             if (setA) {
-                const double fn = n6f(L->cforce + 6 * L->m.eff_joint[C->joint], il);
                 for (i = 0, ci = 0; i < A->nh; i++) {
                     if (i == C->ka) {
                         const double xk = n6f(t->data + nd_xf(A) + 6 * i, il);

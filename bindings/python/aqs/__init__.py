@@ -937,7 +937,9 @@ class Linkage:
         """Refinement of adaptive solves (aqs_linkage_set_adaptive_refinement;
         on by default at aqs.ADAPTIVE_REFINEMENT_LEVEL = 1e-10): an adaptive
         solve whose rounding estimate, relative as for set_rounding_fallback,
-        exceeds level has its computed joints refined by the DCA on the nodes
+        exceeds level, or whose computed joints' constraint forces' estimated
+        error exceeds level times the largest of them, has its computed
+        joints refined by the DCA on the nodes
         it back-substituted (at most exact_refinement corrections, each kept
         only when it lowers the reduced residual); skipped subtrees whose
         coefficients are lossy or whose handle accelerations cancel are
