@@ -2,6 +2,25 @@
  * depth-first order (kintree.h). */
 #include "kintree.h"
 
+double kin_joint_residual_general(const aqs_linkage *L, const aba_joint *jt, const double *f, double il, double *r)
+{
+    double S[36], e = 0.0;
+    const int d = joint_nv(jt->type);
+    int i, j;
+    if (d == 0) return 0.0;
+    joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
+    for (j = 0; j < d; j++) {
+        double s = 0.0, v;
+        for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
+        v = L->tau[jt->voff + j] - s;
+        if (r) r[j] = v;
+        v = fabs(v);
+        if (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0) v *= il;
+        if (!(v <= e)) e = v; /* NaN too */
+    }
+    return e;
+}
+
 void kin_joint_turn(const joint_def *j, int transpose, pose *P)
 {
     double C[9];

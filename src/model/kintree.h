@@ -82,6 +82,23 @@ static inline void kin_joint_pose(const aqs_linkage *L, const aba_joint *jt, pos
     }
 }
 
+/* Position jt's joint equation Q - S^T f (f: the joint's force on its
+ * child, in its aligned frame; S likewise), slot by slot into r when not
+ * NULL. Returns the largest |Q_j - S_j^T f|, a torque slot (an angular
+ * column of S) weighed by il; NaN when one is NaN. A revolute or prismatic
+ * joint inline (S = e_z), the others through kin_joint_residual_general. */
+double kin_joint_residual_general(const aqs_linkage *L, const aba_joint *jt, const double *f, double il, double *r);
+static inline double kin_joint_residual(const aqs_linkage *L, const aba_joint *jt, const double *f, double il,
+                                        double *r)
+{
+    if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+        const double e = L->tau[jt->voff] - f[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5];
+        if (r) r[0] = e;
+        return fabs(e) * (jt->type == AQS_JOINT_REVOLUTE ? il : 1.0);
+    }
+    return kin_joint_residual_general(L, jt, f, il, r);
+}
+
 /* (C, 0) for joint j (transpose 0) or (C^T, 0) (transpose 1): the pose of its
  * aligned frames in its own frames, or the inverse; the identity when C is
  * (joint_align_rotation). */

@@ -485,29 +485,6 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     dense_joint_accel(S, U, Dinv, d, u, ac, L->qdd + jt->voff);
 }
 
-static double fmax_d(double a, double b) { return a > b ? a : b; }
-
-/* A multi-dof joint's largest |Q_j - S_j^T f| (f: its force on the child),
- * torque slots (an angular column of S) weighed by il. */
-#ifdef __GNUC__
-__attribute__((noinline)) /* rare: kept out of the forward pass */
-#endif
-static double projection_residual(const aqs_linkage *L, const aba_joint *jt, const double *f, double il)
-{
-    double S[36], e = 0.0;
-    const int d = joint_nv(jt->type);
-    int i, j;
-    joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-    for (j = 0; j < d; j++) {
-        double s = 0.0, v;
-        for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
-        v = fabs(L->tau[jt->voff + j] - s);
-        if (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0) v *= il;
-        if (!(v <= e)) e = v; /* NaN too */
-    }
-    return e;
-}
-
 /* The forward pass. With check, it also returns the bodies' balance of
  * forces relative to their terms (docs/math.md §5b): with the solve's joint
  * forces f (f_e = IA a + pA, the force of e on its child c), each body's
@@ -534,7 +511,7 @@ static double forward(aqs_linkage *L, int check)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double g[6], tsum = 0.0, bmax = 0.0, fmax = 0.0, emax = 0.0, f6max = 0.0, gn, bal;
+    double g[6], tsum = 0.0, bmax = 0.0, flmax = 0.0, emax = 0.0, f6max = 0.0, gn, bal;
     int32_t k, i;
     int bad = 0;
     const int32_t ahead = prefetch_ahead(m->ne);
@@ -575,12 +552,9 @@ static double forward(aqs_linkage *L, int check)
             const double sc = fabs(t3) + fabs(t4) + fabs(t5) + C[0] * gn + fl;
             const double f6 = (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fl;
             const unsigned char kin = a->kin[k];
-            double e; /* the joint's Q - S^T f, torque slots weighed by 1/l */
-            if (jt->type == AQS_JOINT_REVOLUTE) e = fabs(L->tau[jt->voff] - f[2]) * il; /* S = e_z, aligned */
-            else if (jt->type == AQS_JOINT_PRISMATIC) e = fabs(L->tau[jt->voff] - f[5]);
-            else e = projection_residual(L, jt, f, il);
+            const double e = kin_joint_residual(L, jt, f, il, NULL); /* Q - S^T f, torques by 1/l */
             if (sc > tsum) tsum = sc;
-            if (fl > fmax) fmax = fl;
+            if (fl > flmax) flmax = fl;
             if (f6 > f6max) f6max = f6;
             if (!(e <= emax)) emax = e; /* NaN too */
             b[0] = t3 - f[3];
@@ -619,12 +593,12 @@ static double forward(aqs_linkage *L, int check)
     if (bad || emax != emax) return NAN;
     /* the projection, against the largest joint force, unless the joint
      * forces are below 2^-20 of the terms (a free fall's are rounding noise) */
-    bal = fmax >= 0x1p-20 * tsum && f6max > 0.0 ? emax / (ABA_PROJ_SCALE * f6max) : 0.0;
+    bal = flmax >= 0x1p-20 * tsum && f6max > 0.0 ? emax / (ABA_PROJ_SCALE * f6max) : 0.0;
     /* the balance's scale: the largest term, or 16x the largest joint force
      * where that is smaller, unless the joint forces are below 2^-10 of the
      * terms */
-    if (fmax >= 0x1p-10 * tsum && ABA_FORCE_SCALE * fmax < tsum) tsum = ABA_FORCE_SCALE * fmax;
-    if (tsum > 0.0) bal = fmax_d(bal, bmax / tsum);
+    if (flmax >= 0x1p-10 * tsum && ABA_FORCE_SCALE * flmax < tsum) tsum = ABA_FORCE_SCALE * flmax;
+    if (tsum > 0.0) bal = fmax(bal, bmax / tsum);
     else if (bmax > 0.0) bal = INFINITY;
     return bal;
 }

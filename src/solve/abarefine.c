@@ -86,7 +86,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
     aba_state *a = &L->aba;
     const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
-    double rmax = 0.0, smax = 0.0, tsum = 0.0, S[36], f[6];
+    double rmax = 0.0, smax = 0.0, tsum = 0.0, f[6];
     int32_t k, i, j, bad = 0;
     for (i = 0; i < m->nloaded_comps; i++) {
         const int32_t c = m->loaded_comps[i];
@@ -96,30 +96,16 @@ static double residual(aqs_linkage *L, double *r, int forces)
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
-        const double *Q = L->tau + jt->voff;
         kin_inertia_mul(jt->I, nd->v.s.acc, f);
         /* the bodies' terms, their norms summed: I (a - g) and the weight m |g| (in
          * a free fall both are 0 and m |g|, and so are the joint forces) */
         tsum += (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fabs(f[3]) + fabs(f[4]) + fabs(f[5]) +
                 jt->I[KIN_PC] * gn;
         for (i = 0; i < 6; i++) f[i] += nd->pA[i];
-        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
-            const double s = f[jt->type == AQS_JOINT_REVOLUTE ? 2 : 5], e = Q[0] - s; /* S = e_z */
-            if (r) r[jt->voff] = e;
-            rmax = fmax(rmax, fabs(e) * (jt->type == AQS_JOINT_REVOLUTE ? il : 1.0));
+        {
+            const double e = kin_joint_residual(L, jt, f, il, r ? r + jt->voff : NULL); /* torques by 1/l */
+            rmax = fmax(rmax, e);
             bad |= !(e == e); /* fmax drops a NaN */
-        } else if (jt->type != AQS_JOINT_FIXED) {
-            const int d = joint_nv(jt->type);
-            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            for (j = 0; j < d; j++) {
-                double s = 0.0, e;
-                for (i = 0; i < 6; i++) s += S[i * d + j] * f[i];
-                e = Q[j] - s;
-                if (r) r[jt->voff + j] = e;
-                /* a torque slot (its subspace column angular) weighed by 1/l */
-                rmax = fmax(rmax, fabs(e) * (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0 ? il : 1.0));
-                bad |= !(e == e);
-            }
         }
         smax = fmax(smax, (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fabs(f[3]) + fabs(f[4]) + fabs(f[5]));
         if (forces) memcpy(L->cforce + 6 * (size_t)jt->joint, f, sizeof f);
