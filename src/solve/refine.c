@@ -109,6 +109,13 @@
  * its back-substitution's forces are worse still (3.1e-3 on the oblique
  * chain of 2,000 links). */
 #define ID_FORCE_LEVEL 16.0
+/* The joint forces by the bodies' accelerations (state_forces below) where
+ * the inverse dynamics' forces of the refined accelerations and the
+ * back-substitution's disagree by more than this many u of the largest. */
+#define STATE_LEVEL 64.0
+/* ... and taken where the back-substitution's do not balance the bodies to
+ * this many u (state_forces). */
+#define STATE_BALANCE 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -118,6 +125,7 @@ struct refine {
     double *q1;     /* nv: the candidate */
     double *q0;     /* nv: the unrefined accelerations */
     double *df;     /* 6 njoints: the correction's joint forces (not used after) */
+    double *acc;    /* 6 ne: the bodies' accelerations before a state correction */
     double *v;      /* (kcap + 1) nv: the Krylov basis of M P (orthonormal) */
     double *z;      /* kcap nv: P v_j, the preconditioned directions */
     int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
@@ -136,6 +144,7 @@ void refine_free(aqs_linkage *L)
     lk_free(L, R->q1);
     lk_free(L, R->q0);
     lk_free(L, R->df);
+    lk_free(L, R->acc);
     lk_free(L, R->v);
     lk_free(L, R->z);
     lk_free(L, R->h);
@@ -166,7 +175,8 @@ static int refine_alloc(aqs_linkage *L)
     R->q1 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
     R->q0 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
     R->df = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->njoints + 1, sizeof(double));
-    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->q0 || !R->df) {
+    R->acc = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(double));
+    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->q0 || !R->df || !R->acc) {
         refine_free(L);
         return -1;
     }
@@ -458,11 +468,80 @@ static double id_force_error(aqs_linkage *L)
     return fm > 0.0 ? em / fm : (em > 0.0 ? INFINITY : 0.0);
 }
 
+/* The joint forces by the bodies' accelerations, as the articulated-body
+ * refinement forms them (src/solve/abarefine.c): the bodies' spatial
+ * accelerations a_c (relative to a world that moves with -g, so near a free
+ * fall they are small) are the state refined, not recomputed from qdd: a_c
+ * from qdd sums X a_p + S qdd along the path, and a free joint's qdd near
+ * g leaves u |g| in every body's a_c, u m |g| in the forces. Each
+ * correction dq = DCA^-1(Q - ID(a_c)) moves a_c by dq's accelerations from
+ * rest and is kept when it lowers the residual; the forces are then
+ * ID(a_c)'s, taken where the back-substitution's (L->cforce) do not balance
+ * the bodies at those accelerations: some body's f_c - sum X^T f_child -
+ * (I_c a_c - f_ext,c) above STATE_BALANCE u of min(the largest term, 16 x
+ * the largest joint force) (torques weighed by 1/l). Measured (random
+ * floating trees of tests/support/randtree.c, masses over 1e6 apart, gravity
+ * tilted off the axes, against __float128): where the back-substitution's
+ * forces are 2.4e-13 .. 1.6e-11 of the largest off their balance is 2.5e3
+ * .. 1e5 u and ID(a_c)'s are 7.6e-16 .. 2.6e-15 off; on long chains (tilted,
+ * near-singular, a tip force) the back-substitution's balance at most 9 u,
+ * and ID(a_c)'s forces are the worse ones there (1.9e-14 against 1.6e-15
+ * on the tilted chain of 1,000 links: summed inward over the chain). The
+ * DCA's own residual (src/solve/arefine.c) does not see that error: it holds
+ * the bodies' weights, and stalls at 1.5e4 u of the forces. Run only where
+ * the inverse dynamics' forces of the refined qdd disagree with L->cforce
+ * by more than STATE_LEVEL u (else both are right). Returns the
+ * corrections kept when their forces are taken (L->qdd and L->cforce
+ * refined), 0 when not run or none was kept, -1 when the back-substitution's
+ * forces balance (L->qdd and L->cforce as they were). Between save_loads(L,
+ * 0) and (L, 1). */
+static int32_t state_forces(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    const aba_state *a = &L->aba;
+    const size_t nvb = sizeof(double) * (size_t)L->nv;
+    double rn = residual_eval(L, L->qdd, R->r), d = 0.0, fm = 0.0, *tmp, bal, scale;
+    int32_t kept = 0, it, k, i;
+    for (k = 0; k < L->m.ne; k++) {
+        const double *f = a->node[k].v.s.U, *c = L->cforce + 6 * (size_t)a->joint[k].joint;
+        for (i = 0; i < 6; i++) {
+            d = fmax(d, fabs(f[i] - c[i]));
+            fm = fmax(fm, fabs(c[i]));
+        }
+    }
+    if (!(d > STATE_LEVEL * 1.1102230246251565e-16 * fm) || !isfinite(rn)) return 0;
+    memcpy(R->q1, L->qdd, nvb); /* the accelerations, if the forces stay */
+    for (it = 0; it < L->refine_max && rn > 0.0; it++) {
+        double rn1;
+        if (correction(L, R->r, 0) != 0) break;
+        residual_acc_add(L, R->dq, R->acc);
+        rn1 = residual_eval_acc(L, R->r2);
+        if (!(rn1 < rn)) {
+            residual_acc_restore(L, R->acc);
+            break;
+        }
+        for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
+        tmp = R->r, R->r = R->r2, R->r2 = tmp;
+        rn = rn1;
+        kept++;
+    }
+    if (!kept) return 0;
+    bal = residual_balance(L, L->cforce, R->acc, &scale);
+    if (!(bal > STATE_BALANCE * 1.1102230246251565e-16 * fmin(scale, 16.0 * fm))) {
+        memcpy(L->qdd, R->q1, nvb);
+        return -1;
+    }
+    (void)residual_eval_acc(L, R->r2); /* the kept state's forces */
+    residual_forces(L, L->cforce);
+    if (L->m.nwelded > 0) aba_welded_forces(L);
+    return kept;
+}
+
 void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
     double rn, *tmp, rfloor = -1.0;
-    int32_t cycle, nv = L->nv, kept = 0, akept = 0, i;
+    int32_t cycle, nv = L->nv, kept = 0, akept = 0, skept = 0, i;
     int done = 0, frefined = 0;
     L->s.refined = 0;
     if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return;
@@ -515,8 +594,9 @@ void refine_exact(aqs_linkage *L)
         kept += k;
         if (rn == 0.0) break;
     }
+    if (kept) skept = state_forces(L);
     save_loads(L, 1);
-    if (kept) {
+    if (kept && skept == 0) {
         /* the inverse dynamics' joint forces of the refined accelerations
          * where their estimated error is at the rounding level, or below the
          * unrefined forces' (estimated by how far the accelerations moved)
@@ -538,6 +618,6 @@ void refine_exact(aqs_linkage *L)
             if (L->m.nwelded > 0) aba_welded_forces(L);
         }
     }
-    L->s.refined = akept + kept;
+    L->s.refined = akept + kept + (skept > 0 ? skept : 0);
 }
 

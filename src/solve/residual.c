@@ -31,19 +31,19 @@ void residual_poses(aqs_linkage *L)
     for (k = 0; k < L->m.ne; k++) kin_joint_pose(L, &a->joint[k], &a->node[k].X);
 }
 
-/* The pass of both: homog = 0, r = Q - ID(qdd) with gravity and the loads;
- * homog = 1, r = M qdd (no gravity, no load, no joint force, sign flipped). */
-static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
+/* Outward: a_c = X a_p + S qdd into the node values (v.s.acc), from the
+ * world's -g (homog = 0) or rest (homog = 1). */
+static void outward(aqs_linkage *L, const double *qdd, int homog)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    double g[6], sq = 0.0, S[36];
+    double g[6], S[36];
     int32_t k, i, j;
     for (i = 0; i < 3; i++) {
         g[i] = 0.0;
         g[3 + i] = homog ? 0.0 : -L->gravity[i];
     }
-    for (k = 0; k < m->ne; k++) { /* outward: accelerations, then I a */
+    for (k = 0; k < m->ne; k++) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];
         const double *ap = jt->parent < 0 ? g : a->node[jt->parent].v.s.acc, *qd = qdd + jt->voff;
@@ -60,8 +60,18 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
                 ac[i] += v;
             }
         }
-        kin_inertia_mul(jt->I, ac, nd->v.s.U);
     }
+}
+
+/* Inward from the node values' a_c: f_c = I_c a_c (minus the loads unless
+ * homog) plus the children's, into v.s.U; r = Q - S^T f (homog: S^T f). */
+static double inward(aqs_linkage *L, double *r, int homog)
+{
+    const model *m = &L->m;
+    aba_state *a = &L->aba;
+    double sq = 0.0, S[36];
+    int32_t k, i, j;
+    for (k = 0; k < m->ne; k++) kin_inertia_mul(a->joint[k].I, a->node[k].v.s.acc, a->node[k].v.s.U);
     for (i = 0; i < (homog ? 0 : m->nloaded_comps); i++) { /* minus the loads (none on the world) */
         const int32_t c = m->loaded_comps[i];
         double *f = a->node[a->pos_of_comp[c]].v.s.U;
@@ -93,6 +103,87 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
         }
     }
     return sqrt(sq);
+}
+
+/* The pass of both: homog = 0, r = Q - ID(qdd) with gravity and the loads;
+ * homog = 1, r = M qdd (no gravity, no load, no joint force, sign flipped). */
+static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
+{
+    outward(L, qdd, homog);
+    return inward(L, r, homog);
+}
+
+double residual_eval_acc(aqs_linkage *L, double *r)
+{
+    return inward(L, r, 0);
+}
+
+void residual_acc_add(aqs_linkage *L, const double *dq, double *save)
+{
+    aba_state *a = &L->aba;
+    int32_t k, i;
+    for (k = 0; k < L->m.ne; k++) memcpy(save + 6 * (size_t)k, a->node[k].v.s.acc, 6 * sizeof(double));
+    outward(L, dq, 1);
+    for (k = 0; k < L->m.ne; k++)
+        for (i = 0; i < 6; i++) a->node[k].v.s.acc[i] += save[6 * (size_t)k + i];
+}
+
+double residual_balance(aqs_linkage *L, const double *cforce, double *work, double *scale)
+{
+    const model *m = &L->m;
+    aba_state *a = &L->aba;
+    const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
+    double bmax = 0.0, tmax = 0.0;
+    int32_t k, i, j;
+    for (k = 0; k < m->ne; k++) { /* -(I a_c) into v.s.U, |I a_c| into work */
+        double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k;
+        kin_inertia_mul(a->joint[k].I, a->node[k].v.s.acc, g);
+        for (i = 0; i < 6; i++) {
+            h[i] = fabs(g[i]);
+            g[i] = -g[i];
+        }
+    }
+    for (i = 0; i < m->nloaded_comps; i++) {
+        const int32_t c = m->loaded_comps[i], k2 = a->pos_of_comp[c];
+        for (j = 0; j < 6; j++) {
+            a->node[k2].v.s.U[j] += m->comp_force[6 * c + j];
+            work[6 * (size_t)k2 + j] += fabs(m->comp_force[6 * c + j]);
+        }
+    }
+    for (k = m->ne - 1; k >= 0; k--) { /* children's forces are in */
+        const aba_joint *jt = &a->joint[k];
+        const double *f = cforce + 6 * (size_t)jt->joint;
+        double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k, t[6], bn = 0.0, tn = 0.0;
+        for (i = 0; i < 6; i++) {
+            g[i] += f[i];
+            h[i] += fabs(f[i]);
+        }
+        for (i = 0; i < 6; i++) {
+            const double w = i < 3 ? il : 1.0;
+            bn += fabs(g[i]) * w;
+            tn += h[i] * w;
+        }
+        bmax = fmax(bmax, bn);
+        tmax = fmax(tmax, tn);
+        bmax = bn == bn ? bmax : NAN;
+        if (jt->parent >= 0) {
+            double *gp = a->node[jt->parent].v.s.U, *hp = work + 6 * (size_t)jt->parent;
+            spatial_xform_force_back(&a->node[k].X, f, t);
+            for (i = 0; i < 6; i++) {
+                gp[i] -= t[i];
+                hp[i] += fabs(t[i]);
+            }
+        }
+    }
+    *scale = tmax;
+    return bmax;
+}
+
+void residual_acc_restore(aqs_linkage *L, const double *save)
+{
+    aba_state *a = &L->aba;
+    int32_t k;
+    for (k = 0; k < L->m.ne; k++) memcpy(a->node[k].v.s.acc, save + 6 * (size_t)k, 6 * sizeof(double));
 }
 
 double residual_eval(aqs_linkage *L, const double *qdd, double *r)

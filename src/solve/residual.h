@@ -18,6 +18,19 @@ void residual_poses(aqs_linkage *L);
  * or inf when a value is not finite). The joint forces f it formed stay in
  * the node values (v.s.U) until residual_forces or the next solve. */
 double residual_eval(aqs_linkage *L, const double *qdd, double *r);
+/* The same residual from the node values' accelerations a_c (v.s.acc) as
+ * they are (the inward pass alone): forces into v.s.U. */
+double residual_eval_acc(aqs_linkage *L, double *r);
+/* a_c += the accelerations of dq from rest (save: 6 ne scratch, the old a_c
+ * after); residual_acc_restore puts save back. */
+void residual_acc_add(aqs_linkage *L, const double *dq, double *save);
+void residual_acc_restore(aqs_linkage *L, const double *save);
+/* The bodies' balance of forces with the joint forces cforce at the node
+ * values' accelerations a_c: max over bodies of |f_c - sum_children X^T
+ * f_child - (I_c a_c - f_ext,c)|_1 (torques weighed by 1/l), NaN if one is
+ * not; *scale the largest such sum of the terms' magnitudes. work: 6 ne
+ * scratch; overwrites the forces residual_forces reads. */
+double residual_balance(aqs_linkage *L, const double *cforce, double *work, double *scale);
 /* Mv (nv) = M v, the joint-space inertia matrix at the current positions
  * times v: the same pass at zero gravity, no load, no joint force (the
  * operator of refine.c's GMRES). Needs residual_poses; overwrites the forces

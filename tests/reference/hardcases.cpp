@@ -795,6 +795,14 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
     // estimate of the computed joints' forces joined its trigger (src/solve/adaptive.c)
     if (nseeds < 8)
         add("jtypes", "ground/mixed/tilt/seed=8", 60, [=](Case &c) { build_jtypes(c, 60, false, true, 8, true); });
+    // the exact DCA's forces 49 .. 395x the refined ABA's (the back-substitution's forces
+    // unbalanced; src/solve/refine.c, state_forces): floating tilted seeds 5, 7, grounded seed 5
+    for (uint64_t seed : {5ull, 7ull})
+        if ((uint64_t)nseeds < seed)
+            add("jtypes", "free/mixed/tilt/seed=" + std::to_string(seed), 60,
+                [=](Case &c) { build_jtypes(c, 60, true, true, seed, true); });
+    if (nseeds < 5)
+        add("jtypes", "ground/mixed/seed=5", 60, [=](Case &c) { build_jtypes(c, 60, false, true, 5); });
     for (uint64_t seed : {11ull, 13ull})
         if ((uint64_t)nseeds < seed)
             add("jtypes", "free/mixed/seed=" + std::to_string(seed), 60,
@@ -1345,6 +1353,15 @@ int main(int argc, char **argv) {
         if (check_forces)
             verdict(st == AQS_OK && dca.force <= kDcaVsAba * force_floor, kb && kb->dca,
                     sp.name + " DCA constraint forces " + fmt("%.2e", dca.force) + " vs ABA " + fmt("%.2e", aba.force));
+        // and within 10x of the library's ABA (refined where it lost digits), floor 1e-15: the
+        // yardstick a user has today (2026-12-04: five floating or grounded mixed-mass trees
+        // were 12 .. 395x off it, the DCA's back-substitution forces unbalanced, until the
+        // exact refinement took the forces of the refined bodies' accelerations where they
+        // do not balance: src/solve/refine.c, state_forces)
+        if (check_forces && str == AQS_OK)
+            verdict(st == AQS_OK && dca.force <= kDcaVsAba * std::max(abr.force, kErrFloor), kb && kb->dca,
+                    sp.name + " DCA constraint forces " + fmt("%.2e", dca.force) + " vs the refined ABA " +
+                        fmt("%.2e", abr.force));
         if (json)
             std::fprintf(json, "{\"case\":%s,\"family\":%s,\"dofs\":%d,\"solver\":\"dca\",\"status\":%d,"
                          "\"message\":%s,\"rel2\":%s,\"relmax\":%s,\"force\":%s,\"known_bad\":%s}\n",
