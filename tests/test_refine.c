@@ -439,7 +439,7 @@ static void test_out_of_memory_forces(void **state)
     assert_true(nv <= 64);
     assert_int_equal(aqs_linkage_solve(A), AQS_OK); /* the ABA */
     assert_int_equal(aqs_linkage_get_accelerations(A, qa, (size_t)nv), AQS_OK);
-    for (k = 9;; k++) { /* refine_alloc's eight blocks come first (test_out_of_memory) */
+    for (k = 10;; k++) { /* refine_alloc's nine blocks come first (test_out_of_memory) */
         counting_state cs;
         aqs_linkage *L;
         int failed;

@@ -110,12 +110,11 @@
  * chain of 2,000 links). */
 #define ID_FORCE_LEVEL 16.0
 /* The joint forces by the bodies' accelerations (state_forces below) where
- * the inverse dynamics' forces of the refined accelerations and the
- * back-substitution's disagree by more than this many u of the largest. */
-#define STATE_LEVEL 64.0
-/* ... and taken where the back-substitution's do not balance the bodies to
- * this many u (state_forces). */
+ * the back-substitution's do not balance the bodies to this many u. */
 #define STATE_BALANCE 16.0
+/* ... once the bodies' accelerations are refined: the first correction
+ * lowered the residual by at least this factor (state_forces). */
+#define STATE_CONTRACT 16.0
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -469,68 +468,76 @@ static double id_force_error(aqs_linkage *L)
 }
 
 /* The joint forces by the bodies' accelerations, as the articulated-body
- * refinement forms them (src/solve/abarefine.c): the bodies' spatial
+ * refinement forms them (src/solve/abarefine.c), where the
+ * back-substitution's do not balance the bodies. The bodies' spatial
  * accelerations a_c (relative to a world that moves with -g, so near a free
  * fall they are small) are the state refined, not recomputed from qdd: a_c
- * from qdd sums X a_p + S qdd along the path, and a free joint's qdd near
- * g leaves u |g| in every body's a_c, u m |g| in the forces. Each
- * correction dq = DCA^-1(Q - ID(a_c)) moves a_c by dq's accelerations from
- * rest and is kept when it lowers the residual; the forces are then
- * ID(a_c)'s, taken where the back-substitution's (L->cforce) do not balance
- * the bodies at those accelerations: some body's f_c - sum X^T f_child -
- * (I_c a_c - f_ext,c) above STATE_BALANCE u of min(the largest term, 16 x
- * the largest joint force) (torques weighed by 1/l). Measured (random
- * floating trees of tests/support/randtree.c, masses over 1e6 apart, gravity
- * tilted off the axes, against __float128): where the back-substitution's
- * forces are 2.4e-13 .. 1.6e-11 of the largest off their balance is 2.5e3
- * .. 1e5 u and ID(a_c)'s are 7.6e-16 .. 2.6e-15 off; on long chains (tilted,
- * near-singular, a tip force) the back-substitution's balance at most 9 u,
- * and ID(a_c)'s forces are the worse ones there (1.9e-14 against 1.6e-15
- * on the tilted chain of 1,000 links: summed inward over the chain). The
- * DCA's own residual (src/solve/arefine.c) does not see that error: it holds
- * the bodies' weights, and stalls at 1.5e4 u of the forces. Run only where
- * the inverse dynamics' forces of the refined qdd disagree with L->cforce
- * by more than STATE_LEVEL u (else both are right). Returns the
- * corrections kept when their forces are taken (L->qdd and L->cforce
- * refined), 0 when not run or none was kept, -1 when the back-substitution's
- * forces balance (L->qdd and L->cforce as they were). Between save_loads(L,
- * 0) and (L, 1). */
+ * from qdd sums X a_p + S qdd along the path, and a free joint's qdd near g
+ * leaves u |g| in every body's a_c, u m |g| in the forces, however accurate
+ * qdd is. Each correction dq = DCA^-1(Q - ID(a_c)) moves a_c by dq's
+ * accelerations from rest and is kept when it lowers the residual; qdd
+ * stays as GMRES left it (adding dq to it would add back the rounding of
+ * a_c(qdd) that dq removes). The refined a_c is trusted when the first
+ * correction lowered the residual by at least STATE_CONTRACT (the DCA solves
+ * that residual well: alternating masses 1e9 apart lower it 1.7x, 2.7x,
+ * and the balance below would then judge good forces by poor
+ * accelerations).
+ * The balance (residual_balance: some body's f_c - sum X^T f_child -
+ * (I_c a_c - f_ext,c)) is measured against min(the largest sum of a body's
+ * terms with its weight, 16 x the largest joint force), as the
+ * articulated-body solve's check measures its own (src/solve/aba.c): first
+ * at a_c(qdd), where below STATE_BALANCE u nothing is done (the molecule of
+ * 5,000 joints under gravity: 1.9 u; straight, tilted, oblique chains at
+ * most 1.2 u; floating mixed-mass trees 11 .. 1.1e4 u), then at the refined
+ * a_c: above STATE_BALANCE u the forces become ID(a_c)'s. Measured (twelve
+ * random floating trees of tests/support/randtree.c, masses over 1e6
+ * apart, gravity tilted off the axes, against __float128): where the
+ * back-substitution's forces are 2.4e-13 .. 1.6e-11 of the largest off
+ * their balance at the refined a_c is 133 .. 1.1e4 u, and ID(a_c)'s forces
+ * are 7.6e-16 .. 2.6e-15 off; where they are right it is 0.14 .. 12 u; on
+ * the near-singular chain of 1,000 links with a tip force (957 u at
+ * a_c(qdd)) 0.3 u, where ID(a_c)'s forces, summed inward over the chain,
+ * would be the worse ones (4.4e-14 against 7.7e-16). The DCA's own residual
+ * (src/solve/arefine.c) does not see that error: it holds the bodies'
+ * weights, and stalls at 1.5e4 u of the forces. Returns the corrections
+ * kept when their forces are taken (L->cforce refined), -1 when the
+ * back-substitution's forces balance at the refined a_c, 0 when it did not
+ * run or its a_c is not trusted (L->cforce as it was in both). Between
+ * save_loads(L, 0) and (L, 1). */
 static int32_t state_forces(aqs_linkage *L)
 {
     struct refine *R = L->rf;
     const aba_state *a = &L->aba;
-    const size_t nvb = sizeof(double) * (size_t)L->nv;
-    double rn = residual_eval(L, L->qdd, R->r), d = 0.0, fm = 0.0, *tmp, bal, scale;
-    int32_t kept = 0, it, k, i;
-    for (k = 0; k < L->m.ne; k++) {
-        const double *f = a->node[k].v.s.U, *c = L->cforce + 6 * (size_t)a->joint[k].joint;
-        for (i = 0; i < 6; i++) {
-            d = fmax(d, fabs(f[i] - c[i]));
-            fm = fmax(fm, fabs(c[i]));
-        }
+    const double lim = STATE_BALANCE * 1.1102230246251565e-16, il = L->m.length > 0.0 ? 1.0 / L->m.length : 1.0;
+    double rn, fm = 0.0, *tmp, bal, scale;
+    int32_t kept = 0, it, k;
+    int converged = 0;
+    for (k = 0; k < L->m.ne; k++) { /* the largest joint force, as residual_balance weighs it */
+        const double *c = L->cforce + 6 * (size_t)a->joint[k].joint;
+        fm = fmax(fm, (fabs(c[0]) + fabs(c[1]) + fabs(c[2])) * il + fabs(c[3]) + fabs(c[4]) + fabs(c[5]));
     }
-    if (!(d > STATE_LEVEL * 1.1102230246251565e-16 * fm) || !isfinite(rn)) return 0;
-    memcpy(R->q1, L->qdd, nvb); /* the accelerations, if the forces stay */
+    residual_accelerations(L, L->qdd);
+    bal = residual_balance(L, L->cforce, R->acc, &scale); /* at a_c(qdd) */
+    if (!(bal > lim * fmin(scale, 16.0 * fm))) return 0;
+    rn = residual_eval_acc(L, R->r);
+    if (!isfinite(rn) || !(rn > 0.0)) return 0;
     for (it = 0; it < L->refine_max && rn > 0.0; it++) {
         double rn1;
         if (correction(L, R->r, 0) != 0) break;
         residual_acc_add(L, R->dq, R->acc);
         rn1 = residual_eval_acc(L, R->r2);
-        if (!(rn1 < rn)) {
+        if (!(rn1 < rn)) { /* at the residual's floor */
             residual_acc_restore(L, R->acc);
             break;
         }
-        for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
+        if (it == 0) converged = rn1 * STATE_CONTRACT <= rn;
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         rn = rn1;
         kept++;
     }
-    if (!kept) return 0;
+    if (!converged) return 0;
     bal = residual_balance(L, L->cforce, R->acc, &scale);
-    if (!(bal > STATE_BALANCE * 1.1102230246251565e-16 * fmin(scale, 16.0 * fm))) {
-        memcpy(L->qdd, R->q1, nvb);
-        return -1;
-    }
+    if (!(bal > lim * fmin(scale, 16.0 * fm))) return -1;
     (void)residual_eval_acc(L, R->r2); /* the kept state's forces */
     residual_forces(L, L->cforce);
     if (L->m.nwelded > 0) aba_welded_forces(L);

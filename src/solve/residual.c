@@ -113,6 +113,11 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
     return inward(L, r, homog);
 }
 
+void residual_accelerations(aqs_linkage *L, const double *qdd)
+{
+    outward(L, qdd, 0);
+}
+
 double residual_eval_acc(aqs_linkage *L, double *r)
 {
     return inward(L, r, 0);
@@ -133,6 +138,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     const model *m = &L->m;
     aba_state *a = &L->aba;
     const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
+    const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
     double bmax = 0.0, tmax = 0.0;
     int32_t k, i, j;
     for (k = 0; k < m->ne; k++) { /* -(I a_c) into v.s.U, |I a_c| into work */
@@ -153,7 +159,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     for (k = m->ne - 1; k >= 0; k--) { /* children's forces are in */
         const aba_joint *jt = &a->joint[k];
         const double *f = cforce + 6 * (size_t)jt->joint;
-        double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k, t[6], bn = 0.0, tn = 0.0;
+        double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k, t[6], bn = 0.0, tn = jt->I[KIN_PC] * gn;
         for (i = 0; i < 6; i++) {
             g[i] += f[i];
             h[i] += fabs(f[i]);

@@ -18,6 +18,9 @@ void residual_poses(aqs_linkage *L);
  * or inf when a value is not finite). The joint forces f it formed stay in
  * the node values (v.s.U) until residual_forces or the next solve. */
 double residual_eval(aqs_linkage *L, const double *qdd, double *r);
+/* The bodies' accelerations a_c of qdd (relative to free fall) into the
+ * node values (v.s.acc): residual_eval's outward pass alone. */
+void residual_accelerations(aqs_linkage *L, const double *qdd);
 /* The same residual from the node values' accelerations a_c (v.s.acc) as
  * they are (the inward pass alone): forces into v.s.U. */
 double residual_eval_acc(aqs_linkage *L, double *r);
@@ -28,7 +31,8 @@ void residual_acc_restore(aqs_linkage *L, const double *save);
 /* The bodies' balance of forces with the joint forces cforce at the node
  * values' accelerations a_c: max over bodies of |f_c - sum_children X^T
  * f_child - (I_c a_c - f_ext,c)|_1 (torques weighed by 1/l), NaN if one is
- * not; *scale the largest such sum of the terms' magnitudes. work: 6 ne
+ * not; *scale the largest such sum of the terms' magnitudes with the
+ * body's weight m_c |g| (a_c is relative to free fall). work: 6 ne
  * scratch; overwrites the forces residual_forces reads. */
 double residual_balance(aqs_linkage *L, const double *cforce, double *work, double *scale);
 /* Mv (nv) = M v, the joint-space inertia matrix at the current positions
