@@ -497,9 +497,10 @@ static double id_force_error(aqs_linkage *L)
  * are 7.6e-16 .. 2.6e-15 off; where they are right it is 0.14 .. 12 u; on
  * the near-singular chain of 1,000 links with a tip force (957 u at
  * a_c(qdd)) 0.3 u, where ID(a_c)'s forces, summed inward over the chain,
- * would be the worse ones (4.4e-14 against 7.7e-16). The DCA's own residual
- * (src/solve/arefine.c) does not see that error: it holds the bodies'
- * weights, and stalls at 1.5e4 u of the forces. Returns the corrections
+ * would be the worse ones (4.4e-14 against 7.7e-16). The DCA's own
+ * refinement (src/solve/arefine.c) does not reach it: on the worst tree its
+ * corrections moved the forces by 8.3e4 u, then 1.5e4 u, and its residual
+ * stopped decreasing (not converged: not kept). Returns the corrections
  * kept when their forces are taken (L->cforce refined), -1 when the
  * back-substitution's forces balance at the refined a_c, 0 when it did not
  * run or its a_c is not trusted (L->cforce as it was in both). Between
