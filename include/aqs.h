@@ -960,7 +960,10 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  S qdd, and Q - S^T f: docs/math.md 13a, "The joint forces of a refined
  *  solve"); the forces are then that refinement's (when it converged), or
  *  the inverse dynamics' of the refined accelerations where their estimated
- *  error is at the rounding level or below the unrefined forces'. A cycle's
+ *  error is at the rounding level or below the unrefined forces'; where the
+ *  back-substitution's forces do not balance the bodies, those of the
+ *  bodies' accelerations refined as the state (corrections by the DCA, as
+ *  the articulated-body refinement does; docs/math.md 13a). A cycle's
  *  first step is the plain correction
  *  qdd += DCA^-1(Q - ID(qdd)), about one more pass over the tree's nodes,
  *  and where it is resolved (the usual case) the cycle ends there; otherwise
