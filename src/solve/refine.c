@@ -112,6 +112,11 @@
 /* The joint forces by the bodies' accelerations (state_forces below) where
  * the back-substitution's do not balance the bodies to this many u. */
 #define STATE_BALANCE 16.0
+/* ... of min(the largest term, this many times the largest joint force):
+ * 16, as the articulated-body check has it (ABA_FORCE_SCALE), left one of
+ * twelve floating trees' forces 2.0e-14 off (54x the ABA's) at a balance of
+ * 11.6 u (state_forces). */
+#define STATE_FORCE_SCALE 4.0
 /* ... once the bodies' accelerations are refined: the first correction
  * lowered the residual by at least this factor (state_forces). */
 #define STATE_CONTRACT 16.0
@@ -484,26 +489,26 @@ static double id_force_error(aqs_linkage *L)
  * accelerations).
  * The balance (residual_balance: some body's f_c - sum X^T f_child -
  * (I_c a_c - f_ext,c)) is measured against min(the largest sum of a body's
- * terms with its weight, 16 x the largest joint force), as the
- * articulated-body solve's check measures its own (src/solve/aba.c): first
- * at a_c(qdd), where below STATE_BALANCE u nothing is done (the molecule of
- * 5,000 joints under gravity: 1.9 u; straight, tilted, oblique chains at
- * most 1.2 u; floating mixed-mass trees 11 .. 1.1e4 u), then at the refined
- * a_c: above STATE_BALANCE u the forces become ID(a_c)'s. Measured (twelve
- * random floating trees of tests/support/randtree.c, masses over 1e6
- * apart, gravity tilted off the axes, against __float128): where the
- * back-substitution's forces are 2.4e-13 .. 1.6e-11 of the largest off
- * their balance at the refined a_c is 133 .. 1.1e4 u, and ID(a_c)'s forces
- * are 7.6e-16 .. 2.6e-15 off; where they are right it is 0.14 .. 12 u; on
- * the near-singular chain of 1,000 links with a tip force (957 u at
- * a_c(qdd)) 0.3 u, where ID(a_c)'s forces, summed inward over the chain,
- * would be the worse ones (4.4e-14 against 7.7e-16). The DCA's own
- * refinement (src/solve/arefine.c) does not reach it: on the worst tree its
- * corrections moved the forces by 8.3e4 u, then 1.5e4 u, and its residual
- * stopped decreasing (not converged: not kept). Returns the corrections
- * kept when their forces are taken (L->cforce refined), -1 when the
- * back-substitution's forces balance at the refined a_c, 0 when it did not
- * run or its a_c is not trusted (L->cforce as it was in both). Between
+ * terms with its weight, STATE_FORCE_SCALE x the largest joint force), as
+ * the articulated-body solve's check measures its own (src/solve/aba.c):
+ * first at a_c(qdd), where below STATE_BALANCE u nothing is done (the
+ * molecule of 5,000 joints under gravity: 1.9 u; straight, tilted, oblique
+ * chains at most 3.3 u; floating mixed-mass trees 42 .. 4.3e4 u), then at
+ * the refined a_c: above STATE_BALANCE u the forces become ID(a_c)'s.
+ * Measured (twelve random floating trees of tests/support/randtree.c,
+ * masses over 1e6 apart, gravity tilted off the axes, against __float128):
+ * where the back-substitution's forces are 2.0e-14 .. 1.6e-11 of the
+ * largest off their balance at the refined a_c is 46 .. 4.3e4 u, and
+ * ID(a_c)'s forces are 3.0e-16 .. 2.6e-15 off; where they are right it is
+ * 0.57 .. 16.5 u (either set is right there); on the near-singular chain of 1,000 links with a tip force
+ * (1.5e3 u at a_c(qdd)) 0.46 u, where ID(a_c)'s forces, summed inward over
+ * the chain, would be the worse ones (4.4e-14 against 7.7e-16). The DCA's
+ * own refinement (src/solve/arefine.c) does not reach it: on the worst tree
+ * its corrections moved the forces by 8.3e4 u, then 1.5e4 u, and its
+ * residual stopped decreasing (not converged: not kept). Returns the
+ * corrections kept when their forces are taken (L->cforce refined), -1 when
+ * the back-substitution's forces balance at the refined a_c, 0 when it did
+ * not run or its a_c is not trusted (L->cforce as it was in both). Between
  * save_loads(L, 0) and (L, 1). */
 static int32_t state_forces(aqs_linkage *L)
 {
@@ -519,7 +524,7 @@ static int32_t state_forces(aqs_linkage *L)
     }
     residual_accelerations(L, L->qdd);
     bal = residual_balance(L, L->cforce, R->acc, &scale); /* at a_c(qdd) */
-    if (!(bal > lim * fmin(scale, 16.0 * fm))) return 0;
+    if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return 0;
     rn = residual_eval_acc(L, R->r);
     if (!isfinite(rn) || !(rn > 0.0)) return 0;
     for (it = 0; it < L->refine_max && rn > 0.0; it++) {
@@ -538,7 +543,7 @@ static int32_t state_forces(aqs_linkage *L)
     }
     if (!converged) return 0;
     bal = residual_balance(L, L->cforce, R->acc, &scale);
-    if (!(bal > lim * fmin(scale, 16.0 * fm))) return -1;
+    if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return -1;
     (void)residual_eval_acc(L, R->r2); /* the kept state's forces */
     residual_forces(L, L->cforce);
     if (L->m.nwelded > 0) aba_welded_forces(L);
