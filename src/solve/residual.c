@@ -141,6 +141,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
     double bmax = 0.0, tmax = 0.0;
     int32_t k, i, j;
+    int bad = 0;
     for (k = 0; k < m->ne; k++) { /* -(I a_c) into v.s.U, |I a_c| into work */
         double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k;
         kin_inertia_mul(a->joint[k].I, a->node[k].v.s.acc, g);
@@ -171,7 +172,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
         }
         bmax = fmax(bmax, bn);
         tmax = fmax(tmax, tn);
-        bmax = bn == bn ? bmax : NAN;
+        bad |= !(bn == bn); /* fmax drops a NaN */
         if (jt->parent >= 0) {
             double *gp = a->node[jt->parent].v.s.U, *hp = work + 6 * (size_t)jt->parent;
             spatial_xform_force_back(&a->node[k].X, f, t);
@@ -182,7 +183,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
         }
     }
     *scale = tmax;
-    return bmax;
+    return bad ? NAN : bmax;
 }
 
 void residual_acc_restore(aqs_linkage *L, const double *save)
