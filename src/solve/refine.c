@@ -25,7 +25,8 @@
  * unchanged); then the back-substitution into scratch. The unrefined solve's
  * load-dependent values are saved first and put back at the end, so the
  * lazy update's next solve finds them as they were. The joint forces are
- * refined first, by the DCA's own residual (FORCES below). */
+ * refined first, by the DCA's own residual, and last, where they do not
+ * balance the bodies, by the bodies' accelerations (FORCES below). */
 #include "refine.h"
 
 #include <math.h>
@@ -107,7 +108,11 @@
  * its forces 5.9e-6, the inverse dynamics' of the refined accelerations
  * 3.4e-13, the ABA's 9.4e-13). In the inverse-inertia form (no arefine_solve) they always do:
  * its back-substitution's forces are worse still (3.1e-3 on the oblique
- * chain of 2,000 links). */
+ * chain of 2,000 links). Before either rule, after GMRES (both forms):
+ * where the forces do not balance the bodies, those of the bodies'
+ * accelerations refined as the state (state_forces below); where that
+ * refinement ran and they do balance, they stay as they are and the two
+ * rules above are not applied. */
 #define ID_FORCE_LEVEL 16.0
 /* The joint forces by the bodies' accelerations (state_forces below) where
  * the back-substitution's do not balance the bodies to this many u. */
