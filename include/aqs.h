@@ -68,7 +68,7 @@ typedef int32_t aqs_status;
 #define AQS_ENOMEM (-4) /**< an allocation failed; the linkage is unchanged */
 #define AQS_EMODEL (-5) /**< finalize found the linkage invalid (topology, mass) */
 #define AQS_ENUMERIC (-6) /**< a numerical failure (singular articulated inertia) */
-#define AQS_ESIZE (-7)  /**< a caller's array is too small; nothing was written */
+#define AQS_ESIZE (-7)  /**< a caller's array is too small, or not the exact size asked; nothing was written */
 
 /** A fixed, static text for a status code ("unknown status" for others). */
 AQS_API const char *aqs_status_string(aqs_status status);
@@ -413,7 +413,8 @@ AQS_API aqs_status aqs_linkage_clear_forces(aqs_linkage *linkage);
 /** Active joint force Q, one value per dof (N for translations, N m for
  *  rotations), in the same layout and frame as the joint's acceleration.
  *  tau: (n), n must equal the joint's nv (n = 0 and tau = NULL for fixed
- *  joints). Returns AQS_OK, AQS_EINVAL (n mismatch, non-finite), AQS_ERANGE. */
+ *  joints). Returns AQS_OK, AQS_EINVAL (NULL, non-finite), AQS_ERANGE,
+ *  AQS_ESIZE (n mismatch; nothing set). */
 AQS_API aqs_status aqs_joint_set_force(aqs_linkage *linkage, int32_t joint, const double *tau,
                                        int32_t n);
 

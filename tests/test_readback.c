@@ -1,7 +1,7 @@
 /* test_readback.c -- src/api/readback.c: aqs_body_get_inertial and
  * aqs_joint_get_definition return what was added (after the documented
- * normalization: quaternion and axis divided by their norms, inertia
- * symmetrized), in every phase, for every joint type; NULL out pointers are
+ * normalization: quaternion and axis divided by their norms, the quaternion
+ * negated when its w is negative, inertia symmetrized), in every phase, for every joint type; NULL out pointers are
  * accepted; bad indices and a NULL linkage fail without writing anything. */
 #include "testutil.h"
 
@@ -36,6 +36,7 @@ static void joint_input(int i, double pos[3], double quat[4], double axis[3])
     if (i % 2) {
         quat[0] = 0.8 * s; quat[1] = 0.0; quat[2] = 0.6 * s; quat[3] = 0.0;
     }
+    if (i == 2 || i == 6) quat[0] = -0.5 * s; /* w < 0: read back as -q (w >= 0), the same rotation */
     axis[0] = 0.0; axis[1] = 3.0 + i; axis[2] = 4.0;
 }
 
@@ -82,6 +83,8 @@ static void check_model(const aqs_linkage *L)
         assert_int_equal(ch, i);
         for (k = 0; k < 3; k++) assert_true(gp[k] == p[k]);
         qn = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (q[0] < 0.0) qn = -qn; /* outputs have w >= 0 (docs/api.md, Conventions) */
+        assert_true(gq[0] >= 0.0);
         for (k = 0; k < 4; k++) assert_true(fabs(gq[k] - q[k] / qn) <= 2.3e-16);
         an = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
         if (types[i] == AQS_JOINT_FREE || types[i] == AQS_JOINT_SPHERICAL ||

@@ -45,7 +45,7 @@ AQS_API const char *aqs_status_string(aqs_status status)
     case AQS_ENOMEM: return "out of memory";
     case AQS_EMODEL: return "invalid linkage";
     case AQS_ENUMERIC: return "numerical failure";
-    case AQS_ESIZE: return "array too small";
+    case AQS_ESIZE: return "array of the wrong size";
     default: return "unknown status";
     }
 }
@@ -540,7 +540,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     if (L->exact_solver == AQS_EXACT_DCA || L->t.nnodes == 0) {
         if ((st = dca_enable(L, fn)) != AQS_OK || (st = update_coefficients(L)) != AQS_OK) {
             free_solver(L);
-            return st;
+            return lk_fail_in(L, st, fn);
         }
     }
     L->finalized = 1;
@@ -699,7 +699,7 @@ AQS_API aqs_status aqs_joint_set_force(aqs_linkage *L, int32_t joint, const doub
     if ((st = check_joint(L, fn, joint)) != AQS_OK) return st;
     nv = joint_nv(L->joints[joint].type);
     if (n != nv)
-        return lk_fail(L, AQS_EINVAL, "%s: n = %d but joint %d (%s) has %d dofs", fn, (int)n,
+        return lk_fail(L, AQS_ESIZE, "%s: n = %d but joint %d (%s) has %d dofs", fn, (int)n,
                        (int)joint, joint_type_name(L->joints[joint].type), nv);
     if (nv == 0) return AQS_OK;
     if ((st = check_vec(L, fn, "tau", tau, nv)) != AQS_OK) return st;
@@ -892,7 +892,7 @@ static aqs_status solve(aqs_linkage *L, const char *fn, int stepping)
     fpenv_enter(&e, 1);
     st = solve_body(L, fn, stepping);
     fpenv_leave(&e);
-    return st;
+    return lk_fail_in(L, st, fn); /* the solvers' messages name no function */
 }
 
 AQS_API aqs_status aqs_linkage_solve(aqs_linkage *L)
@@ -974,7 +974,7 @@ static aqs_status step_body(aqs_linkage *L, double dt)
         if (!L->exact_by_aba) (void)update_coefficients(L);
         memcpy(L->error, msg, sizeof msg);
     }
-    return st;
+    return lk_fail_in(L, st, fn);
 }
 
 AQS_API aqs_status aqs_linkage_step(aqs_linkage *L, double dt)

@@ -39,7 +39,11 @@ AQS_API aqs_status aqs_joint_get_definition(const aqs_linkage *cL, int32_t joint
     if (parent) *parent = j->parent;
     if (child) *child = j->child;
     if (pos) memcpy(pos, j->pos, sizeof j->pos);
-    if (quat) memcpy(quat, j->quat, sizeof j->quat);
+    if (quat) { /* w >= 0 (docs/api.md, Conventions): q and -q are the same rotation */
+        const double sgn = j->quat[0] < 0.0 ? -1.0 : 1.0;
+        int i;
+        for (i = 0; i < 4; i++) quat[i] = sgn * j->quat[i];
+    }
     if (axis) memcpy(axis, j->axis, sizeof j->axis);
     return AQS_OK;
 }

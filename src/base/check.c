@@ -20,6 +20,18 @@ aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
     return status;
 }
 
+aqs_status lk_fail_in(aqs_linkage *L, aqs_status status, const char *fn)
+{
+    const size_t n = strlen(fn) + 2, cap = sizeof L->error;
+    if (status == AQS_OK || strncmp(L->error, "aqs_", 4) == 0 || n >= cap) return status;
+    memmove(L->error + n, L->error, cap - n); /* what no longer fits is cut */
+    L->error[cap - 1] = '\0';
+    memcpy(L->error, fn, n - 2);
+    L->error[n - 2] = ':';
+    L->error[n - 1] = ' ';
+    return status;
+}
+
 int check_quat_is_unit(const double q[4], double *norm)
 {
     *norm = quat_norm(q);

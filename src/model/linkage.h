@@ -417,5 +417,9 @@ aqs_status lk_fail(aqs_linkage *L, aqs_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/* Prefix the recorded message with "fn: " unless it names a function of the
+ * API already (it starts with "aqs_"): the solvers' own messages do not know
+ * which call reached them. Returns status. */
+aqs_status lk_fail_in(aqs_linkage *L, aqs_status status, const char *fn);
 
 #endif

@@ -1332,7 +1332,7 @@ static int joint_coefficients(aqs_linkage *L, int32_t n, const double *Sd, int32
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
         for (j = 0; j < d; j++) x += G2[d * r + j] * Q[j];
         rho[r] = x;
-        if (!isfinite(x)) return -1;
+        if (!isfinite(x)) return -2; /* the loads overflowed (the pivots above are fine) */
     }
 #ifdef DCA_AVX
     if (t->avx) jc_gamma_avx(E, Eb, U, Q, c, d, gw);
@@ -1422,8 +1422,9 @@ static int rigid_join_wanted(const double *mpA, const double *mpB, const double 
 
 /* Node n's update in inertia form (both children rigid and not grounded): the
  * same outputs as hybrid_phi (mass properties, Lambda of rank d, b, FX, QX,
- * rho, gamma) by the formulas above. Returns 0, or -1 when a composite
- * inertia or D is not positive definite. */
+ * rho, gamma) by the formulas above. Returns 0, -1 when a composite
+ * inertia or D is not positive definite, -2 when rho came out non-finite
+ * from finite D and U (the loads overflowed). */
 static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
                       const double *Q)
 {
@@ -1504,7 +1505,7 @@ static int rigid_join(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         double x = 0.0;
         for (s = 0; s < d; s++) x += Di[6 * r + s] * Q[s];
         for (j = 0; j < 6; j++) x -= U[6 * r + j] * beta[j];
-        if (!isfinite(x)) return -1;
+        if (!isfinite(x)) return -2; /* the loads overflowed (D, U are finite) */
         rho[r] = x;
     }
     for (i = 0; i < 6; i++) {
@@ -1641,7 +1642,8 @@ static void pivot_column(double *M, int32_t ncol, int32_t q, int32_t rows, int32
  * rho = D^-1-free: -U beta + Sd^T K2 K2^T Sd Q, gamma = W beta + U^T Q, with
  * Sd = S (S^T S)^-1 (docs/math.md, "Accurate Phi"). Returns 0, or -1 when a
  * composite inertia is not positive definite or the joint cannot take a
- * constraint force (Lc singular); 1, having written nothing but the composite
+ * constraint force (Lc singular), -2 when rho came out non-finite from
+ * finite factors (the loads overflowed); 1, having written nothing but the composite
  * inertia, when both sides are rigid and rigid_join_wanted: the caller then
  * takes rigid_join (called from there, so that it is not inlined here). */
 static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, const double beta[6],
@@ -1973,8 +1975,8 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
             if (i != C->ka) memcpy(bo + 6 * ci++, bA + 6 * i, 6 * sizeof(double));
         for (i = 0; i < nB; i++)
             if (i != C->kb) memcpy(bo + 6 * ci++, bB + 6 * i, 6 * sizeof(double));
-        if (joint_coefficients(L, n, Sd, d, Tc, X, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq) != 0)
-            return -1;
+        const int e = joint_coefficients(L, n, Sd, d, Tc, X, rel, rel + (int64_t)c * ncol, ncol, w, beta, Q, bo, kq);
+        if (e != 0) return e;
     }
     /* Lambda_C: X2 as it is while it has at most 6nh columns (the subassembly's
      * internal dofs), else compressed to lower-trapezoidal form by reflections:

@@ -19,8 +19,10 @@ void dca_phi_leaf(aqs_linkage *L, int32_t n);
 void dca_leaf_b(aqs_linkage *L, int32_t n);
 /* Internal node: its coefficients (rho, gamma, S, b, FX = W M^T, QX =
  * U M^T, and Lambda or Phi) from its children and the principal joint's
- * position and force, in the linkage's DCA form. Returns 0, or -1 when
- * the articulated inertia is numerically singular. */
+ * position and force, in the linkage's DCA form. Returns 0, -1 when
+ * the articulated inertia is numerically singular, -2 (square-root form)
+ * when the joint's acceleration term rho came out non-finite from finite
+ * factors: the loads overflowed. */
 int dca_node_update(aqs_linkage *L, int32_t n);
 /* Keep each node's load factors from its next update on (what rho, gamma and
  * b take from beta and Q; square-root form): 36 + 6 d + d^2 doubles per internal

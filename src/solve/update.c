@@ -123,9 +123,18 @@ static aqs_status update_node(aqs_linkage *L, int32_t n)
     AQS_ASSERT(L->t.nodes[nd->a].jw <= L->t.nodes[nd->a].rank && L->t.nodes[nd->b].jw <= L->t.nodes[nd->b].rank);
     AQS_ASSERT(nd_xf(nd) >= 0 && nd_xf(nd) + 6 * (int64_t)nd->nh <= L->t.ndata);
     AQS_ASSERT(nd->nh <= L->t.max_handles);
-    if (dca_node_update(L, n) != 0)
+    switch (dca_node_update(L, n)) {
+    case 0:
+        break;
+    case -2:
+        return lk_fail(L, AQS_ENUMERIC,
+                       "the loads across joint %d overflowed (its acceleration term came out non-finite "
+                       "from finite inertias: gravity or forces too large)",
+                       (int)L->m.eff_joint[nd->joint]);
+    default:
         return lk_fail(L, AQS_ENUMERIC, "articulated inertia across joint %d is numerically singular",
                        (int)L->m.eff_joint[nd->joint]);
+    }
     /* Lambda is stored at its rank, with row stride rank: the structural rank layout()
      * gave it room for (the inverse-inertia form keeps Phi, lld = 6nh) */
     AQS_ASSERT(L->dca_form == AQS_DCA_FORM_PHI ? nd->lld == 6 * nd->nh : nd->rank == nd->lld);

@@ -386,6 +386,72 @@ def _named(value, names, function, name):
     return _index(value, function, name)
 
 
+class _FairLock:
+    """A reentrant lock handed to its waiters in the order they came (FIFO).
+
+    threading.RLock is not fair: a thread that releases it and asks again at
+    once (a loop of step() calls, whose C call releases the GIL) takes it
+    back ahead of a thread already waiting, which then waits for the whole
+    loop, not for one call. Here release() hands the lock to the oldest
+    waiter directly. Uncontended, acquire and release take one short
+    critical section each."""
+
+    __slots__ = ("_mutex", "_owner", "_count", "_waiters")
+    _HANDOFF = object()  # owner while the lock passes to a waiter
+
+    def __init__(self):
+        self._mutex = threading.Lock()
+        self._owner = None
+        self._count = 0
+        self._waiters = collections.deque()
+
+    def acquire(self):
+        me = threading.get_ident()
+        if self._owner == me:  # only this thread sets it to its own id
+            self._count += 1
+            return True
+        with self._mutex:
+            if self._owner is None:
+                self._owner, self._count = me, 1
+                return True
+            gate = threading.Lock()
+            gate.acquire()
+            self._waiters.append(gate)
+        try:
+            gate.acquire()  # released by the owner that hands the lock over
+        except BaseException:  # interrupted while waiting (KeyboardInterrupt)
+            with self._mutex:
+                try:
+                    self._waiters.remove(gate)
+                    handed = False
+                except ValueError:
+                    handed = True  # the lock came to this thread meanwhile
+            if handed:
+                self._owner, self._count = me, 1
+                self.release()
+            raise
+        self._owner, self._count = me, 1
+        return True
+
+    def release(self):
+        if self._owner != threading.get_ident():
+            raise RuntimeError("cannot release an aqs linkage lock this thread does not hold")
+        self._count -= 1
+        if self._count:
+            return
+        with self._mutex:
+            if self._waiters:
+                self._owner = self._HANDOFF
+                self._waiters.popleft().release()
+            else:
+                self._owner = None
+
+    __enter__ = acquire
+
+    def __exit__(self, *exc_info):
+        self.release()
+
+
 class Linkage:
     """An articulated linkage: owns one aqs_linkage handle.
 
@@ -396,10 +462,12 @@ class Linkage:
     closing twice is fine; any other call on a closed linkage raises
     StateError.
 
-    Threads: each Linkage has its own lock (a threading.RLock) that every
-    method holds while it runs, close() included, so calls from several
-    threads on one linkage run one after the other (a close() during another
-    thread's step() waits for the step to finish), and calls on different
+    Threads: each Linkage has its own lock (reentrant, and fair: waiting
+    calls get it in the order they came) that every method holds while it
+    runs, close() included, so calls from several threads on one linkage run
+    one after the other (a close() during another thread's step() waits for
+    that step, not for the thread's later ones, which then raise StateError),
+    and calls on different
     linkages run in parallel: the C calls release the GIL. A Linkage cannot
     be copied or pickled (TypeError): it owns its C handle.
 
@@ -423,7 +491,7 @@ class Linkage:
 
     def __init__(self):
         """Create an empty linkage using malloc/free (aqs_linkage_create)."""
-        self._lock = threading.RLock()
+        self._lock = _FairLock()
         self._in_c = False
         self._handle = None
         self._callbacks = None
@@ -445,7 +513,7 @@ class Linkage:
         StateError there, so alloc reports a failed allocation).
         """
         self = cls.__new__(cls)
-        self._lock = threading.RLock()
+        self._lock = _FairLock()
         self._in_c = False
         self._handle = None
 
@@ -646,6 +714,14 @@ class Linkage:
         self._call(f, _index(joint, f, "joint"), ctypes.byref(qo), ctypes.byref(nq),
                    ctypes.byref(vo), ctypes.byref(nv))
         return JointLayout(qo.value, nq.value, vo.value, nv.value)
+
+    def _layout_for(self, joint, function):
+        """joint_layout(joint) for a method about to call function: a bad
+        index raises the error under function's name, the call the user made."""
+        try:
+            return self.joint_layout(joint)
+        except Error as e:
+            raise type(e)(e.message.replace("aqs_joint_get_layout", function, 1)) from None
 
     def tree_stats(self):
         """Assembly tree statistics after finalize (aqs_linkage_get_tree_stats):
@@ -1107,7 +1183,7 @@ class Linkage:
         """Position of one joint, (its nq) (aqs_joint_get_position)."""
         f = "aqs_joint_get_position"
         joint = _index(joint, f, "joint")
-        out = np.empty(self.joint_layout(joint).nq, dtype=_F64)
+        out = np.empty(self._layout_for(joint, f).nq, dtype=_F64)
         self._call(f, joint, out, out.size)
         return out
 
@@ -1133,7 +1209,7 @@ class Linkage:
         """Acceleration of one joint of the last solve, (its nv) (aqs_joint_get_acceleration)."""
         f = "aqs_joint_get_acceleration"
         joint = _index(joint, f, "joint")
-        out = np.empty(self.joint_layout(joint).nv, dtype=_F64)
+        out = np.empty(self._layout_for(joint, f).nv, dtype=_F64)
         self._call(f, joint, out, out.size)
         return out
 
