@@ -242,7 +242,8 @@ typedef struct aqs_memory_stats {
                              tolerance, cap or AQS_EXACT_DCA (0 before) */
     uint64_t factors;   /**< the total-acceleration factors (a tolerance or a cap; 0 before) */
     uint64_t world;     /**< the world measures' per-node data (0 until one is set) */
-    uint64_t collision; /**< shapes, bounding volumes, certificates (0 without shapes) */
+    uint64_t collision; /**< shapes, bounding volumes, certificates (0 without shapes; a few
+                             hundred bytes once a filter or setting is stored) */
 } aqs_memory_stats;
 
 /** Fill stats (stats->size set by the caller, >= 8). Any phase. Returns

@@ -155,6 +155,43 @@ static void failing_free(void *user, void *ptr)
     byte_free(&((failing *)user)->c, ptr);
 }
 
+/* Collision settings on a linkage without shapes hold the settings only (a
+ * few hundred bytes under collision), not the assembly tree's poses: until
+ * 2026-12-05 the first filter made every later move recompute and keep them
+ * (about 1.5 KB per joint under tree), as a shape does. Twins, one with a
+ * world filter and collide_joined set before building, finalized and moved
+ * the same way: the same tree bytes; the first shape then adds the poses. */
+static void test_settings_without_shapes(void **state)
+{
+    aqs_linkage *A = test_new_linkage(), *B = test_new_linkage();
+    const double size[3] = {0.1, 0.0, 0.0}, pos[3] = {0, 0, 0}, quat[4] = {1, 0, 0, 0};
+    aqs_memory_stats ma, mb;
+    double q[40];
+    int32_t i;
+    (void)state;
+    assert_int_equal(aqs_body_set_collision_filter(B, AQS_WORLD, 2, 2), AQS_OK);
+    assert_int_equal(aqs_linkage_set_collide_joined(B, 1), AQS_OK);
+    build(A, 40);
+    build(B, 40);
+    assert_int_equal(aqs_linkage_finalize(A), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(B), AQS_OK);
+    for (i = 0; i < 40; i++) q[i] = 0.01 * i;
+    assert_int_equal(aqs_linkage_set_positions(A, q, 40), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(B, q, 40), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(A), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(B), AQS_OK);
+    ma = memory(A);
+    mb = memory(B);
+    assert_int_equal(mb.tree, ma.tree);
+    assert_int_equal(ma.collision, 0);
+    assert_true(mb.collision > 0 && mb.collision < 1024);
+    assert_int_equal(aqs_shape_add(B, 3, AQS_SHAPE_SPHERE, size, pos, quat, NULL), AQS_OK);
+    mb = memory(B);
+    assert_true(mb.tree > ma.tree); /* the poses, now that a shape follows the moves */
+    aqs_linkage_destroy(A);
+    aqs_linkage_destroy(B);
+}
+
 static void test_failed_allocation_counts_nothing(void **state)
 {
     failing F;
@@ -213,6 +250,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_counts_match_allocator),
+        cmocka_unit_test(test_settings_without_shapes),
         cmocka_unit_test(test_failed_allocation_counts_nothing),
         cmocka_unit_test(test_bad_arguments),
     };

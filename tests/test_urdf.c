@@ -544,6 +544,15 @@ static void test_load_arguments(void **state)
     assert_int_equal(aqs_linkage_solve(L), AQS_OK);
     aqs_linkage_destroy(L);
     remove(path);
+
+    /* Collision settings without a shape leave a linkage empty: it loads (it
+     * was refused, "it has 0 bodies, 0 joints, shapes", until 2026-12-05). */
+    L = test_new_linkage();
+    assert_int_equal(aqs_body_set_collision_filter(L, AQS_WORLD, 4, 4), AQS_OK);
+    assert_int_equal(aqs_linkage_set_collide_joined(L, 1), AQS_OK);
+    assert_int_equal(aqs_linkage_load_urdf_buffer(L, cad_arm, strlen(cad_arm), NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    aqs_linkage_destroy(L);
 }
 
 /* root = free: a massless root link floats with what is welded to it. */

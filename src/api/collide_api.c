@@ -19,11 +19,6 @@ static collision *collide_state(aqs_linkage *L)
         if (!L->col) return NULL;
         L->col->world_group = 1u;
         L->col->world_mask = 0xFFFFFFFFu;
-        if (frames_poses(L) != AQS_OK) { /* from now on the tree's poses follow every move */
-            lk_free(L, L->col);
-            L->col = NULL;
-            return NULL;
-        }
     }
     return L->col;
 }
@@ -82,6 +77,9 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
 {
     collision *c = collide_state(L);
     if (!c) return oom(L, fn);
+    /* the first shape: from now on the tree's poses follow every move (a
+     * linkage with filters and no shape holds no poses for them) */
+    if (c->nshapes == 0 && frames_poses(L) != AQS_OK) return oom(L, fn);
     if (c->nshapes == c->shape_cap) {
         int32_t cap = c->shape_cap ? 2 * c->shape_cap : 8;
         shape_def *grown = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)cap * sizeof(shape_def));
