@@ -800,9 +800,11 @@ AQS_API aqs_status aqs_linkage_get_body_poses_world(const aqs_linkage *linkage, 
 #define AQS_SHAPE_HULL 4     /**< convex hull of points (aqs_shape_add_hull only) */
 
 /** Attach a shape to body (a body index, or AQS_WORLD for a static
- *  obstacle). type: AQS_SHAPE_SPHERE..AQS_SHAPE_CYLINDER. size: (3), entries
- *  unused by the type are ignored (may be anything finite). pos: (3) origin of
- *  the shape frame in the body frame (world frame for AQS_WORLD), m. quat:
+ *  obstacle). type: AQS_SHAPE_SPHERE..AQS_SHAPE_CYLINDER. size: (3), the
+ *  entries the type uses in [1e-150, 1e150] (the scale collision geometry is
+ *  computed at), the others ignored (may be anything finite). pos: (3) origin of
+ *  the shape frame in the body frame (world frame for AQS_WORLD), m, each
+ *  entry within 1e150. quat:
  *  (4, w x y z) its orientation, unit within 1e-6, then normalized.
  *  out_shape: receives the shape index (shapes of all bodies and obstacles
  *  are numbered together from 0, in the order added; may be NULL).
@@ -812,8 +814,8 @@ AQS_API aqs_status aqs_shape_add(aqs_linkage *linkage, int32_t body, int32_t typ
                                  int32_t *out_shape);
 
 /** Attach the convex hull of npoints points (npoints x 3, row-major, in the
- *  shape frame; finite; at least 4 not all coplanar, relative to their
- *  extent: 1e-9) to body, placed by pos and quat as in aqs_shape_add. The
+ *  shape frame; each coordinate within 1e150; at least 4 not all coplanar,
+ *  relative to their extent: 1e-9, and not all within 1e-150 of each other) to body, placed by pos and quat as in aqs_shape_add. The
  *  points are copied. Returns AQS_OK, AQS_EINVAL, AQS_ERANGE, AQS_ENOMEM. */
 AQS_API aqs_status aqs_shape_add_hull(aqs_linkage *linkage, int32_t body, const double *points,
                                       int32_t npoints, const double pos[3], const double quat[4],

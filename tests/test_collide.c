@@ -54,8 +54,9 @@ static void test_bad_shapes(void **state)
     aqs_linkage *L = chain(2, 0.3, 0);
     const double sz[3] = {0.2, 0.3, 0.4}, nan_sz[3] = {0.2, NAN, 0.4}, neg[3] = {0.2, -1, 0.4};
     const double inf_pos[3] = {0, 0, INFINITY}, qbad[4] = {1, 0.1, 0, 0}, qnan[4] = {NAN, 0, 0, 0};
+    const double tiny[3] = {1e-200, 0, 0}, huge[3] = {1, 1, 1e200}, far[3] = {0, -1e151, 0};
     const double cube[24] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
-    double flat[24], nanpts[24];
+    double flat[24], nanpts[24], small[24], big[24], tinypts[24];
     int k;
     EXPECT_FAIL(L, aqs_shape_add(L, 2, AQS_SHAPE_BOX, sz, O, Q1, NULL), AQS_ERANGE, "aqs_shape_add", "body = 2");
     EXPECT_FAIL(L, aqs_shape_add(L, -5, AQS_SHAPE_BOX, sz, O, Q1, NULL), AQS_ERANGE, "body = -5", "AQS_WORLD");
@@ -63,7 +64,13 @@ static void test_bad_shapes(void **state)
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_HULL, sz, O, Q1, NULL), AQS_EINVAL, "type = 4", "aqs_shape_add_hull");
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, NULL, O, Q1, NULL), AQS_EINVAL, "size", "NULL");
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, nan_sz, O, Q1, NULL), AQS_EINVAL, "size[1] = nan", "finite");
-    EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_CAPSULE, neg, O, Q1, NULL), AQS_EINVAL, "size[1] = -1", "> 0");
+    EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_CAPSULE, neg, O, Q1, NULL), AQS_EINVAL, "size[1] = -1", "in [1e-150, 1e150]");
+    /* the scale collision geometry is computed at (src/collide/shape.h, SHAPE_MIN, SHAPE_MAX):
+     * beyond it a query came out wrong, not failed (a cube of 1e200 around a sphere: no
+     * contact; of 1e-200: depth 0.5 for 0.3) */
+    EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_SPHERE, tiny, O, Q1, NULL), AQS_EINVAL, "size[0] = 1e-200", "in [1e-150, 1e150]");
+    EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, huge, O, Q1, NULL), AQS_EINVAL, "size[2] = 1e+200", "in [1e-150, 1e150]");
+    EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, sz, far, Q1, NULL), AQS_EINVAL, "pos[1] = -1e+151", "beyond 1e150");
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, sz, inf_pos, Q1, NULL), AQS_EINVAL, "pos[2] = inf", "finite");
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, sz, NULL, Q1, NULL), AQS_EINVAL, "pos", "NULL");
     EXPECT_FAIL(L, aqs_shape_add(L, 0, AQS_SHAPE_BOX, sz, O, qbad, NULL), AQS_EINVAL, "quat has norm 1.00498", "unit");
@@ -77,6 +84,15 @@ static void test_bad_shapes(void **state)
     EXPECT_FAIL(L, aqs_shape_add_hull(L, 0, NULL, 8, O, Q1, NULL), AQS_EINVAL, "points", "NULL");
     EXPECT_FAIL(L, aqs_shape_add_hull(L, 0, flat, 8, O, Q1, NULL), AQS_EINVAL, "the 8 points are coplanar", "aqs_shape_add_hull");
     EXPECT_FAIL(L, aqs_shape_add_hull(L, 0, nanpts, 8, O, Q1, NULL), AQS_EINVAL, "points[7] (point 2) = nan", "finite");
+    /* hulls: the coplanarity test is the same at every scale (a unit cube shrunk by 1e-140 or
+     * grown by 1e140 is a hull; unscaled, the squares underflowed or overflowed below 1e-161
+     * and above 1e154 and it was called coplanar), and the scale is bounded as for sizes */
+    for (k = 0; k < 24; k++) small[k] = 1e-140 * cube[k], big[k] = 1e140 * cube[k], tinypts[k] = 1e-200 * cube[k];
+    assert_int_equal(aqs_shape_add_hull(L, 0, small, 8, O, Q1, NULL), AQS_OK);
+    assert_int_equal(aqs_shape_add_hull(L, 0, big, 8, O, Q1, NULL), AQS_OK);
+    big[4] = 2e150;
+    EXPECT_FAIL(L, aqs_shape_add_hull(L, 0, big, 8, O, Q1, NULL), AQS_EINVAL, "points[4] (point 1) = 2e+150", "beyond 1e150");
+    EXPECT_FAIL(L, aqs_shape_add_hull(L, 0, tinypts, 8, O, Q1, NULL), AQS_EINVAL, "the 8 points lie within 1e-150", "underflows");
     EXPECT_FAIL(L, aqs_shape_add_hull(L, 9, cube, 8, O, Q1, NULL), AQS_ERANGE, "body = 9", "aqs_shape_add_hull");
     /* filters */
     EXPECT_FAIL(L, aqs_body_set_collision_filter(L, 3, 1, 1), AQS_ERANGE, "aqs_body_set_collision_filter", "body = 3");
@@ -432,6 +448,63 @@ static void test_collision_api_errors(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* A hull's interior points change nothing: its centre (MPR's interior point)
+ * comes from the hull's extreme points (src/collide/shape.c, hull_centre).
+ * A box given by its 8 corners, and the same box with 30 interior points
+ * clustered in one corner (listed first), against a sphere obstacle at 1,000
+ * random placements, shallow to deep (the sphere's centre anywhere inside):
+ * the same contacts, bit for bit. Until 2026-12-05 the centre was the
+ * centroid of all the points, and deep contacts' depths differed by up to
+ * 1.07 between the two (MPR's estimate moves with its interior point). */
+static void hull_box_scene(aqs_linkage *L, const double *pts, int32_t npts)
+{
+    const double com[3] = {0, 0, 0}, I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, z3[3] = {0, 0, 0};
+    const double q1[4] = {1, 0, 0, 0}, r[3] = {0.1, 0, 0};
+    assert_int_equal(aqs_body_add(L, 1.0, com, I, NULL), AQS_OK);
+    assert_int_equal(aqs_joint_add(L, AQS_JOINT_FREE, AQS_WORLD, 0, z3, q1, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_shape_add_hull(L, 0, pts, npts, z3, q1, NULL), AQS_OK);
+    assert_int_equal(aqs_shape_add(L, AQS_WORLD, AQS_SHAPE_SPHERE, r, z3, q1, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+}
+
+static void test_hull_interior_points(void **state)
+{
+    const double h[3] = {0.3, 0.5, 0.7};
+    double corners[24], more[114];
+    aqs_linkage *A = test_new_linkage(), *B = test_new_linkage();
+    uint64_t rng = 11;
+    int32_t i, k, deep = 0;
+    (void)state;
+    for (i = 0; i < 8; i++)
+        for (k = 0; k < 3; k++) corners[3 * i + k] = (i >> k & 1 ? 1.0 : -1.0) * h[k];
+    for (i = 0; i < 30; i++)
+        for (k = 0; k < 3; k++) more[3 * i + k] = test_uniform(&rng, 0.5, 0.99) * h[k];
+    memcpy(more + 90, corners, sizeof corners);
+    hull_box_scene(A, corners, 8);
+    hull_box_scene(B, more, 38);
+    for (i = 0; i < 1000; i++) {
+        double q[7] = {0, 0, 0, 1, 0, 0, 0}, w;
+        aqs_contact ca[2], cb[2];
+        size_t na = 0, nb = 0;
+        for (k = 0; k < 3; k++) q[k] = test_uniform(&rng, -1.05, 1.05) * h[k]; /* the hull at -p: p in the box mostly */
+        for (k = 0; k < 4; k++) q[3 + k] = test_uniform(&rng, -1, 1);
+        w = sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+        for (k = 0; k < 4; k++) q[3 + k] /= w;
+        assert_int_equal(aqs_linkage_set_positions(A, q, 7), AQS_OK);
+        assert_int_equal(aqs_linkage_set_positions(B, q, 7), AQS_OK);
+        memset(ca, 0, sizeof ca);
+        memset(cb, 0, sizeof cb);
+        assert_int_equal(aqs_linkage_collide(A, AQS_COLLIDE_LAZY, ca, 2, &na), AQS_OK);
+        assert_int_equal(aqs_linkage_collide(B, AQS_COLLIDE_LAZY, cb, 2, &nb), AQS_OK);
+        assert_true(na == nb && na <= 1);
+        assert_memory_equal(ca, cb, sizeof ca);
+        if (na == 1 && ca[0].depth > 0.1) deep++;
+    }
+    assert_true(deep > 300); /* most placements are deep: where the centre mattered */
+    aqs_linkage_destroy(A);
+    aqs_linkage_destroy(B);
+}
+
 /* aqs_linkage_get_query_stats: the size-versioned statistics agree with the
  * four-pointer getter and with the collision state's own counters (read
  * through src/collide/collide.h), size covers what is written, and bad arguments
@@ -495,6 +568,7 @@ int main(void)
         cmocka_unit_test(test_penalty_rest),
         cmocka_unit_test(test_penalty_chain_rests),
         cmocka_unit_test(test_collision_api_errors),
+        cmocka_unit_test(test_hull_interior_points),
         cmocka_unit_test(test_query_stats),
     };
     return cmocka_run_group_tests_name("collide", tests, NULL, NULL);

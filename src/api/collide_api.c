@@ -67,6 +67,10 @@ static aqs_status check_placement(aqs_linkage *L, const char *fn, const double p
     if ((st = check_vec(L, fn, "pos", pos, 3)) != AQS_OK || (st = check_vec(L, fn, "quat", quat, 4)) != AQS_OK ||
         (st = check_unit_quat(L, fn, "quat", quat, &len)) != AQS_OK)
         return st;
+    for (i = 0; i < 3; i++)
+        if (!(fabs(pos[i]) <= SHAPE_MAX))
+            return lk_fail(L, AQS_EINVAL, "%s: pos[%d] = %g is beyond 1e150 (collision geometry there overflows)",
+                           fn, i, pos[i]);
     for (i = 0; i < 4; i++) q[i] = quat[i] / len;
     pose_from_quat(pos, q, P);
     return AQS_OK;
@@ -121,7 +125,8 @@ AQS_API aqs_status aqs_shape_add(aqs_linkage *L, int32_t body, int32_t type, con
     if (!size) return lk_fail(L, AQS_EINVAL, "%s: size is NULL", fn);
     if ((r = shape_check_size(type, size)) != 0)
         return lk_fail(L, AQS_EINVAL, "%s: size[%d] = %g must be finite%s", fn, r - 1, size[r - 1],
-                       isfinite(size[r - 1]) ? " and > 0" : "");
+                       isfinite(size[r - 1]) ? " and in [1e-150, 1e150] (collision geometry beyond over- or underflows)"
+                                             : "");
     memset(&s, 0, sizeof s);
     if ((st = check_placement(L, fn, pos, quat, &s.local)) != AQS_OK) return st;
     s.type = type;
@@ -146,8 +151,13 @@ AQS_API aqs_status aqs_shape_add_hull(aqs_linkage *L, int32_t body, const double
     if (!points) return lk_fail(L, AQS_EINVAL, "%s: points is NULL", fn);
     r = shape_check_hull(points, npoints);
     if (r > 0)
-        return lk_fail(L, AQS_EINVAL, "%s: points[%d] (point %d) = %g is not finite", fn, r - 1,
-                       (r - 1) / 3, points[r - 1]);
+        return lk_fail(L, AQS_EINVAL, "%s: points[%d] (point %d) = %g is not finite%s", fn, r - 1,
+                       (r - 1) / 3, points[r - 1],
+                       isfinite(points[r - 1]) ? " or beyond 1e150 (collision geometry there overflows)" : "");
+    if (r == -3)
+        return lk_fail(L, AQS_EINVAL,
+                       "%s: the %d points lie within 1e-150 of each other (collision geometry at that "
+                       "scale underflows)", fn, (int)npoints);
     if (r < 0)
         return lk_fail(L, AQS_EINVAL,
                        "%s: the %d points are coplanar (relative 1e-9); a hull needs volume", fn,

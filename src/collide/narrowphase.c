@@ -432,9 +432,15 @@ static void segment_hull(const shape_def *s, const double e0[3], const double e1
 {
     double w[4][3], wx[4][3], wy[4][3], lambda[4] = {1, 0, 0, 0}, v[3], dir[3], sx[3], sy[3], d2, prev = INFINITY;
     int n = 1, it, i, j;
+    /* the start: the hull's support point towards e0 from its centre, a point
+     * of its boundary, so that interior points change nothing (the first
+     * input point did) */
+    for (i = 0; i < 3; i++) dir[i] = e0[i] - s->centre[i];
+    if (!(vec3_dot(dir, dir) > 0.0)) dir[0] = 1.0, dir[1] = dir[2] = 0.0;
+    shape_support(s, dir, sy);
     for (i = 0; i < 3; i++) {
         wx[0][i] = e0[i];
-        wy[0][i] = s->pts[i];
+        wy[0][i] = sy[i];
         w[0][i] = wx[0][i] - wy[0][i];
     }
     for (it = 0; it < 64; it++) {
