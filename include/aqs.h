@@ -354,7 +354,8 @@ AQS_API int32_t aqs_urdf_supported(void);
 
 /** Load a URDF file into linkage, which must be empty (no body, no joint,
  *  not finalized: create it with aqs_linkage_create or with an allocator;
- *  all memory, the parser's included, comes from its allocator).
+ *  the linkage's memory, the loader's element tree included, comes from its
+ *  allocator; expat's own parser state, freed before return, from malloc).
  *  Bodies are the links in document order (a massless root link is the
  *  world, not a body), joints the URDF joints in document order, preceded by
  *  joint 0 "world_to_<root>" when the root link has mass; bodies and joints

@@ -641,8 +641,12 @@ static void test_rounding_fallback(void **state)
     assert_int_equal(st.rounding_fallback, 0);
     assert_true(st.computed_joints < st.counted_joints);
     assert_true(st.rounding_bound > 1e3 * AQS_ROUNDING_FALLBACK_LEVEL);
-    /* on (the default level): exact by the ABA, this solve and a run */
+    /* on (the default level): exact by the ABA, this solve and a run; the
+     * positions set again (the same values) leave every node stale, for the
+     * first solve's update to recompute */
     assert_int_equal(aqs_linkage_set_rounding_fallback(L, AQS_ROUNDING_FALLBACK_LEVEL), AQS_OK);
+    assert_int_equal(aqs_linkage_get_positions(L, a, (size_t)nq), AQS_OK);
+    assert_int_equal(aqs_linkage_set_positions(L, a, (size_t)nq), AQS_OK);
     for (k = 0; k <= AQS_FALLBACK_RUN; k++) {
         const int step = k >= 2;
         assert_int_equal(aqs_linkage_solve(X), AQS_OK); /* the twin's exact solve, where L starts */
@@ -654,6 +658,14 @@ static void test_rounding_fallback(void **state)
         assert_int_equal(st.fallback, 0);
         assert_true(st.error_bound == 0.0);
         assert_int_equal(st.computed_joints, st.counted_joints);
+        /* the work counted: the first solve's adaptive solve, which the
+         * fallback replaced (they read 0 until 2026-12-05); the run's
+         * solves are the ABA's alone */
+        if (k == 0) {
+            assert_true(st.nodes_processed > 0 && st.nodes_updated > 0);
+        } else {
+            assert_int_equal(st.nodes_processed, 0);
+        }
         assert_int_equal(aqs_linkage_get_accelerations(L, a, (size_t)nv), AQS_OK);
         assert_memory_equal(a, e, sizeof(double) * (size_t)nv);
         if (step) {

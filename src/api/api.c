@@ -815,6 +815,7 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
     L->exact_by_aba = 0;
     L->fb_last = 0;
     L->rfb_last = 0;
+    L->rfb_processed = 0;
     L->s.refined = 0;
     fb = fb || rfb;
     if (!fb && autopath_applies(L)) {
@@ -852,11 +853,16 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
             /* its computed joints and its bound carry more rounding than the
              * level allows: this solve and the next AQS_FALLBACK_RUN are exact
              * (docs/math.md §10a, "The rounding fallback") */
+            const int32_t updated = L->t.nodes_updated, factors = L->t.factors_updated;
             adaptive_predict_clear(L);
+            L->rfb_processed = L->s.nprocessed;
             if ((st = aba_solve(L)) != AQS_OK) {
                 stale_solve_failed(L);
                 return st;
             }
+            /* the stats count the adaptive solve's work too (aba_solve zeroed them) */
+            L->t.nodes_updated = updated;
+            L->t.factors_updated = factors;
             L->exact_by_aba = 1;
             path = AQS_PATH_EXACT_ABA;
             L->rfb_last = 1;
@@ -1204,7 +1210,7 @@ AQS_API aqs_status aqs_linkage_get_stats(const aqs_linkage *cL, aqs_solve_stats 
     full.computed_joints = L->s.all ? L->s.counted : L->s.computed;
     full.counted_joints = L->s.counted;
     full.nodes_updated = L->t.nodes_updated;
-    full.nodes_processed = L->s.nprocessed;
+    full.nodes_processed = L->s.nprocessed + L->rfb_processed; /* the fallback's adaptive solve's */
     full.capped = L->s.capped;
     full.fallback = L->fb_last;
     full.nodes_predicted = L->s.all ? 0 : L->s.npredicted;

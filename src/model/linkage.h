@@ -372,6 +372,7 @@ struct aqs_linkage {
     double arf_level;     /* aqs_linkage_set_adaptive_refinement's level (0: off) */
     int32_t rfb_left;     /* exact solves left in a rounding fallback's run */
     int rfb_last;         /* the last solve was exact because of the rounding fallback */
+    int32_t rfb_processed; /* the nodes the adaptive solve it replaced processed (stats; 0 otherwise) */
     aba_state aba;
     struct collision *col; /* shapes and their queries (src/collide/collide.h); NULL without shapes */
     struct worldbound *wb; /* the world-space measures' per-node data (src/solve/worldbound.h); NULL until one is set */
