@@ -963,7 +963,7 @@ def test_save_warns_collision_shapes_not_written(tmp_path):
         assert _save_with_warnings(L, tmp_path / "chain.urdf") == []
 
 
-def test_save_infinite_effort_and_velocity_load_back_infinite(tmp_path):
+def test_save_infinite_effort_and_velocity_load_back_unbounded(tmp_path):
     limits = [(-1.0, 2.0, 5.0, math.inf), (-1.0, 2.0, math.inf, 0.5),
               (-math.inf, math.inf, 3.0, math.inf), (-1.0, 2.0, math.inf, math.inf)]
     path = tmp_path / "limits.urdf"
@@ -971,15 +971,20 @@ def test_save_infinite_effort_and_velocity_load_back_infinite(tmp_path):
         for j, lim in enumerate(limits):
             L.set_joint_limits(j, *lim)
         aqs.save_urdf(L, path)
-    # An infinite effort or velocity is left out of <limit> (the loader's
-    # +inf); it was written 0 and loaded back 0.
+    # An infinite effort or velocity is written 1e300, as unbounded positions
+    # are (it was written 0 and loaded back as a limit of 0); every attribute
+    # is there, as urdfdom's readers require.
     written = [j.find("limit").attrib for j in ET.parse(str(path)).getroot().findall("joint")]
-    assert [sorted(a) for a in written] == [["effort", "lower", "upper"],
-                                            ["lower", "upper", "velocity"],
-                                            ["effort", "lower", "upper"],
-                                            ["lower", "upper"]]
+    assert all(sorted(a) == ["effort", "lower", "upper", "velocity"] for a in written)
+    def unbounded(v):
+        return v if math.isfinite(v) else math.copysign(1e300, v)
     with aqs.load_urdf(path) as M:
-        assert [tuple(M.joint_limits(j)) for j in range(len(limits))] == limits
+        for j, lim in enumerate(limits):
+            got = tuple(M.joint_limits(j))
+            assert got[2:] == (unbounded(lim[2]), unbounded(lim[3])), (j, got)
+            # positions: a revolute joint without them is written "continuous"
+            # and keeps none (+-inf); else as given, +-1e300 when unbounded
+            assert got[:2] in (lim[:2], (unbounded(lim[0]), unbounded(lim[1]))), (j, got)
 
 
 def test_saved_axes_load_back_within_the_documented_bound(tmp_path):

@@ -28,9 +28,8 @@ one URDFWarning counting the names renamed; a name with a character XML
 1.0 cannot carry (a control character other than tab, newline, carriage
 return) raises URDFError. aqs revolute joints without position limits are
 written as "continuous"; URDF has no "none", so unbounded positions are
-written as +-1e300 (loaded back as +-1e300, not +-inf), and an infinite
-effort or velocity is left out of <limit>, which load_urdf reads as +inf
-(URDF readers built on urdfdom require both attributes). Collision shapes
+written as +-1e300 and an infinite effort or velocity as 1e300 (loaded back
+as +-1e300, not +-inf; urdfdom's readers require both attributes). Collision shapes
 are not written (a URDFWarning counts them). Spherical, universal and
 cylindrical joints have no URDF equivalent and raise URDFError. Loading
 the file back gives the same masses, centres of mass, inertias and
@@ -313,17 +312,15 @@ def save_urdf(linkage, path, name="aqs"):
             ET.SubElement(joint, "axis", xyz=_fmt(d.axis))
         if kind in ("prismatic", "revolute") or math.isfinite(limits.effort) \
                 or math.isfinite(limits.velocity):
-            # URDF has no "none": unbounded positions as +-1e300. An infinite
-            # effort or velocity is left out, which the loader reads as +inf
-            # (src/api/urdf.c, read_joint), so that it loads back as it was.
+            # URDF has no "none": an unbounded position, effort or velocity
+            # as +-1e300 (loaded back as 1e300: unbounded for any use). Not 0,
+            # which loaded back as a limit of 0, and not left out: readers
+            # on urdfdom (ROS, Pinocchio) require effort and velocity.
             def bound(v, sign):
                 return _fmt([v]) if math.isfinite(v) else sign + _PRISMATIC_LIMIT
-            limit = ET.SubElement(joint, "limit", lower=bound(limits.lower, "-"),
-                                  upper=bound(limits.upper, ""))
-            if math.isfinite(limits.effort):
-                limit.set("effort", _fmt([limits.effort]))
-            if math.isfinite(limits.velocity):
-                limit.set("velocity", _fmt([limits.velocity]))
+            ET.SubElement(joint, "limit", lower=bound(limits.lower, "-"),
+                          upper=bound(limits.upper, ""), effort=bound(limits.effort, ""),
+                          velocity=bound(limits.velocity, ""))
     ET.indent(robot)
     ET.ElementTree(robot).write(str(path), encoding="utf-8", xml_declaration=True)
     # What the file does not hold as the linkage does, one warning per kind.
