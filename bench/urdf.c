@@ -134,7 +134,7 @@ static aqs_status write_joints(const aqs_linkage *L, FILE *f, int32_t joints, ch
             fputs("\"/>\n", f);
         }
         if (type == AQS_JOINT_PRISMATIC)
-            fputs("    <limit lower=\"-1e300\" upper=\"1e300\" effort=\"0\" velocity=\"0\"/>\n", f);
+            fputs("    <limit lower=\"-1e300\" upper=\"1e300\" effort=\"1e300\" velocity=\"1e300\"/>\n", f);
         fputs("  </joint>\n", f);
     }
     return AQS_OK;

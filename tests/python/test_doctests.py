@@ -28,3 +28,21 @@ def test_the_module_docstring_has_examples():
     finder = doctest.DocTestFinder()
     names = {t.name for t in finder.find(aqs, "aqs") if t.examples}
     assert {"aqs", "aqs.Linkage"} <= names, names
+
+
+def test_bindings_readme_blocks_run_in_sequence(capsys):
+    """bindings/python/README.md's Python blocks run one after the other as
+    written (the second continues with the first's linkage; it was closed
+    by the first block's `with`, and `j` was undefined)."""
+    import os
+    import re
+    readme = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, os.pardir,
+                          "bindings", "python", "README.md")
+    if not os.path.exists(readme):
+        pytest.skip("no source checkout (bindings/python/README.md)")
+    with open(readme, encoding="utf-8") as handle:
+        blocks = re.findall(r"```python\n(.*?)```", handle.read(), re.S)
+    assert len(blocks) >= 2
+    namespace = {}
+    for k, block in enumerate(blocks):
+        exec(compile(block, "%s, Python block %d" % (readme, k + 1), "exec"), namespace)

@@ -22,6 +22,10 @@
   modelled; four real robots (tests/data/urdf) against their own files:
   masses, inertias, names, limits, and gravity torques computed here from
   the file's frames, which must hold every joint at rest (1e-9 relative).
+- the writer loads what it writes: equal names and names equal to a
+  placeholder made distinct (one warning), names XML cannot carry refused,
+  collision shapes reported as not written, infinite effort and velocity
+  loading back infinite, axes within the documented 3.3e-16.
 """
 
 
@@ -846,3 +850,159 @@ def test_real_robot_root_free_floats():
             d = L.joint_definition(0)
             assert d.kind == "free" and L.joint_names[0] == "world_to_base"
             assert L.nv == 6 + 12
+
+
+# ---------------------------------------------------------------------------
+# The writer: every file it writes loads (found from outside, 2026-12-05)
+# ---------------------------------------------------------------------------
+
+def _chain(n=3, bodies=None, joints=None):
+    """n bodies in a chain of revolute joints, named from the dicts
+    {index: name} (the rest unnamed)."""
+    L = aqs.Linkage()
+    for i in range(n):
+        L.add_body(1.0, (0, 0, 0.1), np.eye(3) * 0.01)
+    for i in range(n):
+        L.add_joint("revolute", i - 1, i, pos=(0, 0, 0.3), axis=(1, 0, 0))
+    for i, s in (bodies or {}).items():
+        L.set_body_name(i, s)
+    for i, s in (joints or {}).items():
+        L.set_joint_name(i, s)
+    L.finalize()
+    return L
+
+
+def _save_with_warnings(L, path):
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        aqs.save_urdf(L, path)
+    return [str(w.message) for w in record if issubclass(w.category, aqs.URDFWarning)]
+
+
+# Each case: (body names, joint names) given, then the names loaded back and
+# the number of names the warning counts.
+NAME_CASES = {
+    "duplicate bodies": (({0: "a", 1: "a"}, {}), (["a", "a__2", "link_2"], None), 1),
+    "three of a kind, one already suffixed": (
+        ({0: "a", 1: "a", 2: "a__2"}, {}), (["a", "a__3", "a__2"], None), 1),
+    "placeholder of body 0 is body 2's name": (
+        ({2: "link_0"}, {}), (["link_0__2", "link_1", "link_0"], None), 1),
+    "placeholder of joint 0 is joint 2's name": (
+        ({}, {2: "joint_0"}), (None, ["joint_0__2", "joint_1", "joint_0"]), 1),
+    "duplicate joints": (({}, {0: "j", 1: "j", 2: "j"}), (None, ["j", "j__2", "j__3"]), 2),
+    "a body and a joint may share a name": (({0: "x"}, {0: "x"}), (["x", "link_1", "link_2"],
+                                                                 ["x", "joint_1", "joint_2"]), 0),
+}
+
+
+@pytest.mark.parametrize("case", sorted(NAME_CASES))
+def test_save_makes_names_unique(tmp_path, case):
+    (bodies, joints), (body_names, joint_names), renamed = NAME_CASES[case]
+    path = tmp_path / "names.urdf"
+    with _chain(bodies=bodies, joints=joints) as L:
+        texts = _save_with_warnings(L, path)
+        # The file loads (it was refused: "link 'a' is defined twice"), with
+        # the same model in it.
+        with aqs.load_urdf(path) as M:
+            if body_names:
+                assert M.body_names == body_names
+            if joint_names:
+                assert M.joint_names == joint_names
+            assert M.sizes() == L.sizes()
+    renames = [t for t in texts if "renamed" in t]
+    if renamed:
+        assert len(renames) == 1 and renames[0].startswith("save_urdf: %d names renamed"
+                                                           % renamed), texts
+    else:
+        assert renames == []
+
+
+def test_save_names_are_deterministic(tmp_path):
+    with _chain(n=5, bodies={0: "a", 1: "a", 3: "link_4", 4: "a"}) as L:
+        _save_with_warnings(L, tmp_path / "one.urdf")
+        _save_with_warnings(L, tmp_path / "two.urdf")
+    assert (tmp_path / "one.urdf").read_text() == (tmp_path / "two.urdf").read_text()
+    with aqs.load_urdf(tmp_path / "one.urdf") as M:
+        assert M.body_names == ["a", "a__2", "link_2", "link_4", "a__3"]
+
+
+@pytest.mark.parametrize("what, char", [("body", "\x01"), ("joint", "\x1f"), ("body", "\x0b"),
+                                        ("joint", "\ufffe")])
+def test_save_refuses_names_xml_cannot_carry(tmp_path, what, char):
+    names = {1: "a%sb" % char}
+    path = tmp_path / "bad.urdf"
+    with _chain(bodies=names if what == "body" else None,
+                joints=names if what == "joint" else None) as L:
+        # Was a file load_urdf refused ("not well-formed XML (invalid token)").
+        with pytest.raises(aqs.URDFError, match=r"save_urdf: %s 1 name .* holds the character "
+                                                 r"U\+%04X, which XML 1.0 cannot carry"
+                                                 % (what, ord(char))):
+            aqs.save_urdf(L, path)
+    assert not path.exists()
+
+
+def test_save_names_with_whitespace_and_specials_load_back(tmp_path):
+    given = {0: "a\tb\nc", 1: "cr\rhere", 2: " a<&\"'>b "}
+    with _chain(bodies=given) as L:
+        assert _save_with_warnings(L, tmp_path / "ws.urdf") == []
+    with aqs.load_urdf(tmp_path / "ws.urdf") as M:
+        assert M.body_names == [given[0], given[1], given[2]]
+
+
+def test_save_warns_collision_shapes_not_written(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", aqs.URDFWarning)
+        L = aqs.load_urdf(DATA / "go1.urdf", collision=True)
+    with L:
+        assert L.shape_count == 38
+        texts = _save_with_warnings(L, tmp_path / "go1.urdf")
+    assert texts == ["save_urdf: 38 collision shapes are not written: save_urdf writes no "
+                     "<collision>"]
+    # Without shapes, nothing to say.
+    with _chain() as L:
+        assert _save_with_warnings(L, tmp_path / "chain.urdf") == []
+
+
+def test_save_infinite_effort_and_velocity_load_back_unbounded(tmp_path):
+    limits = [(-1.0, 2.0, 5.0, math.inf), (-1.0, 2.0, math.inf, 0.5),
+              (-math.inf, math.inf, 3.0, math.inf), (-1.0, 2.0, math.inf, math.inf)]
+    path = tmp_path / "limits.urdf"
+    with _chain(n=len(limits)) as L:
+        for j, lim in enumerate(limits):
+            L.set_joint_limits(j, *lim)
+        aqs.save_urdf(L, path)
+    # An infinite effort or velocity is written 1e300, as unbounded positions
+    # are (it was written 0 and loaded back as a limit of 0); every attribute
+    # is there, as urdfdom's readers require.
+    written = [j.find("limit").attrib for j in ET.parse(str(path)).getroot().findall("joint")]
+    assert all(sorted(a) == ["effort", "lower", "upper", "velocity"] for a in written)
+    def unbounded(v):
+        return v if math.isfinite(v) else math.copysign(1e300, v)
+    with aqs.load_urdf(path) as M:
+        for j, lim in enumerate(limits):
+            got = tuple(M.joint_limits(j))
+            assert got[2:] == (unbounded(lim[2]), unbounded(lim[3])), (j, got)
+            # positions: a revolute joint without them is written "continuous"
+            # and keeps none (+-inf); else as given, +-1e300 when unbounded
+            assert got[:2] in (lim[:2], (unbounded(lim[0]), unbounded(lim[1]))), (j, got)
+
+
+def test_saved_axes_load_back_within_the_documented_bound(tmp_path):
+    """docs/urdf.md: an axis comes back within 3.3e-16 per component (the
+    loader normalizes the unit axis again, which can move it by an ulp or
+    two); an axis along x, y or z comes back bit for bit."""
+    rng = np.random.default_rng(3)
+    n = 60
+    with aqs.Linkage() as L:
+        for i in range(n):
+            L.add_body(1.0, (0, 0, 0.1), np.eye(3) * 0.01)
+        axes = [rng.normal(size=3) for _ in range(n - 3)] + [(0, 0, 2), (0, -1, 0), (3, 0, 0)]
+        for i in range(n):
+            L.add_joint("revolute" if i % 2 else "prismatic", i - 1, i, axis=axes[i])
+        L.finalize()
+        L.save_urdf(tmp_path / "axes.urdf")
+        with aqs.load_urdf(tmp_path / "axes.urdf") as M:
+            got = np.array([M.joint_definition(j).axis for j in range(n)])
+        given = np.array([L.joint_definition(j).axis for j in range(n)])
+    assert np.abs(got - given).max() <= 3.4e-16
+    assert np.array_equal(got[-3:], given[-3:])

@@ -21,11 +21,19 @@ save_urdf writes the model at q = 0 (URDF has no joint state): a massless
 root link "world", one link per body with its inertial (origin at the
 centre of mass, rpy 0, the body-frame inertia), one joint per joint with
 origin xyz and rpy from its quaternion, every number with %.17g, names
-from the linkage (else link_<i>, joint_<j>), limits when set. aqs revolute
-joints without position limits are written as "continuous"; URDF has no
-"none", so unbounded positions are written as +-1e300 and an infinite effort
-or velocity as 0. Spherical, universal and cylindrical joints have no URDF
-equivalent and raise URDFError.
+from the linkage (else link_<i>, joint_<j>), limits when set. URDF names
+must be distinct: a repeated name is written "name__2", "name__3"... (the
+first occurrence keeps it) and a placeholder avoids every user name, with
+one URDFWarning counting the names renamed; a name with a character XML
+1.0 cannot carry (a control character other than tab, newline, carriage
+return) raises URDFError. aqs revolute joints without position limits are
+written as "continuous"; URDF has no "none", so unbounded positions are
+written as +-1e300 and an infinite effort or velocity as 1e300 (loaded back
+as +-1e300, not +-inf; urdfdom's readers require both attributes). Collision shapes
+are not written (a URDFWarning counts them). Spherical, universal and
+cylindrical joints have no URDF equivalent and raise URDFError. Loading
+the file back gives the same masses, centres of mass, inertias and
+joint origins bit for bit; joint rotations and axes to a few ulp (docs/urdf.md).
 """
 
 import ctypes
@@ -185,16 +193,90 @@ def _fmt(values):
     return " ".join("%.17g" % (float(v) + 0.0) for v in np.ravel(values))
 
 
+def _unwritable_character(text):
+    """The first character of text that XML 1.0 cannot carry, not even as a
+    character reference (&#1; is not well-formed): those below 0x20 other
+    than tab, newline and carriage return, the surrogates, U+FFFE and
+    U+FFFF. None when there is none."""
+    for c in text:
+        o = ord(c)
+        if (o < 0x20 and c not in "\t\n\r") or 0xD800 <= o <= 0xDFFF or o in (0xFFFE, 0xFFFF):
+            return c
+    return None
+
+
+def _check_names(names, what):
+    """URDFError for the first name that XML cannot carry (what: "body" or
+    "joint"), naming its index and the character. Such a name is refused
+    rather than altered: the file would hold another name than the model."""
+    for i, n in enumerate(names):
+        c = _unwritable_character(n)
+        if c is not None:
+            raise URDFError("save_urdf: %s %d name %r holds the character U+%04X, which XML "
+                            "1.0 cannot carry (not even escaped)" % (what, i, n, ord(c)))
+
+
+def _unique_names(given, placeholder, what):
+    """One distinct URDF name per body or joint, deterministically: given[i],
+    the user's name ("" when unnamed), for its first occurrence; a later
+    occurrence is written given[i] + "__2", "__3"...; an unnamed one gets
+    placeholder % i. A name made here (suffixed or placeholder) avoids every
+    user name and every name already handed out, so no user name loses its
+    first occurrence to it. Returns the names and, for the warning, the
+    descriptions of those written otherwise than "the user's name, else the
+    placeholder"."""
+    users = set(n for n in given if n)
+    taken = set()
+    next_suffix = {}  # base -> the first suffix not tried yet (no quadratic rescans)
+    names = [None] * len(given)
+
+    def fresh(base):
+        k = next_suffix.get(base, 2)
+        while "%s__%d" % (base, k) in users or "%s__%d" % (base, k) in taken:
+            k += 1
+        next_suffix[base] = k + 1
+        return "%s__%d" % (base, k)
+
+    # The user's names first, in index order, then the placeholders, so that
+    # a placeholder avoids the names of later bodies too.
+    for i, n in enumerate(given):
+        if n:
+            names[i] = n if n not in taken else fresh(n)
+            taken.add(names[i])
+    for i, n in enumerate(given):
+        if not n:
+            base = placeholder % i
+            names[i] = base if base not in users and base not in taken else fresh(base)
+            taken.add(names[i])
+    renamed = ["%s %d %s -> %r" % (what, i, repr(n) if n else "(unnamed)", names[i])
+               for i, n in enumerate(given) if names[i] != (n or placeholder % i)]
+    return names, renamed
+
+
 def save_urdf(linkage, path, name="aqs"):
     """Write linkage as URDF to path (see the module's documentation).
 
     Link names come from linkage.body_names when it has them (as load_urdf
     sets), else "link_<i>"; joint names likewise from joint_names, else
-    "joint_<j>". Raises URDFError for joints URDF cannot express (spherical,
-    universal, cylindrical, or a free joint from a body)."""
+    "joint_<j>". URDF needs link names distinct, and joint names: a name met
+    again is written with "__2", "__3"... appended (its first occurrence
+    keeps it), a placeholder that is some body's or joint's name likewise,
+    and one URDFWarning says how many names were renamed and which. A name
+    holding a character XML cannot carry (control characters other than
+    tab, newline, carriage return) raises URDFError, as do joints URDF
+    cannot express (spherical, universal, cylindrical). Collision shapes are
+    not written (a URDFWarning counts them)."""
     sizes = linkage.sizes()
-    body_names = [n or "link_%d" % i for i, n in enumerate(linkage.body_names)]
-    joint_names = [n or "joint_%d" % j for j, n in enumerate(linkage.joint_names)]
+    given_bodies, given_joints = linkage.body_names, linkage.joint_names
+    _check_names(given_bodies, "body")
+    _check_names(given_joints, "joint")
+    bad = _unwritable_character(str(name))
+    if bad is not None:
+        raise URDFError("save_urdf: robot name %r holds the character U+%04X, which XML 1.0 "
+                        "cannot carry (not even escaped)" % (name, ord(bad)))
+    body_names, renamed = _unique_names(given_bodies, "link_%d", "body")
+    joint_names, renamed_joints = _unique_names(given_joints, "joint_%d", "joint")
+    renamed += renamed_joints
     world = "world"
     while world in body_names:
         world = "_" + world
@@ -230,14 +312,24 @@ def save_urdf(linkage, path, name="aqs"):
             ET.SubElement(joint, "axis", xyz=_fmt(d.axis))
         if kind in ("prismatic", "revolute") or math.isfinite(limits.effort) \
                 or math.isfinite(limits.velocity):
-            # URDF has no "none": unbounded positions as +-1e300, effort and
-            # velocity as 0 (what URDF readers take for "not given").
+            # URDF has no "none": an unbounded position, effort or velocity
+            # as +-1e300 (loaded back as 1e300: unbounded for any use). Not 0,
+            # which loaded back as a limit of 0, and not left out: readers
+            # on urdfdom (ROS, Pinocchio) require effort and velocity.
             def bound(v, sign):
                 return _fmt([v]) if math.isfinite(v) else sign + _PRISMATIC_LIMIT
             ET.SubElement(joint, "limit", lower=bound(limits.lower, "-"),
-                          upper=bound(limits.upper, ""),
-                          effort=_fmt([limits.effort]) if math.isfinite(limits.effort) else "0",
-                          velocity=_fmt([limits.velocity]) if math.isfinite(limits.velocity)
-                          else "0")
+                          upper=bound(limits.upper, ""), effort=bound(limits.effort, ""),
+                          velocity=bound(limits.velocity, ""))
     ET.indent(robot)
     ET.ElementTree(robot).write(str(path), encoding="utf-8", xml_declaration=True)
+    # What the file does not hold as the linkage does, one warning per kind.
+    if renamed:
+        warnings.warn("save_urdf: %d names renamed (URDF link names must be distinct, and "
+                      "joint names): %s%s" % (len(renamed), ", ".join(renamed[:5]),
+                                              ", ..." if len(renamed) > 5 else ""),
+                      URDFWarning, stacklevel=2)
+    shapes = linkage.shape_count
+    if shapes > 0:
+        warnings.warn("save_urdf: %d collision shapes are not written: save_urdf writes no "
+                      "<collision>" % shapes, URDFWarning, stacklevel=2)
