@@ -534,6 +534,65 @@ static void test_failed_solve_then_solve(void **state)
     }
 }
 
+/* A free body in free fall has every point's acceleration g and no joint
+ * force, exactly, however near a point mass it is and however far its centre
+ * of mass lies from its frame's origin. The articulated-body solve took the
+ * free joint's accelerations as D^-1 (u - U^T a_p) with D = U = the body's
+ * articulated inertia about its origin, whose rotational part is k I plus
+ * m |c|^2: a round trip that lost cond(D) u (0.75 kg, k = 1e-16, c = (0.3, 0,
+ * 0), status AQS_OK: angular accelerations (0, 0.5, 4) rad/s^2 for 0; m =
+ * 1e16 with k = 0.25: 8.4), and its joint force IA a + pA as much (8e301 for
+ * 0). Found from outside, 2026-12-05. Now qdd = D^-1 u - a_p and f = Q for a
+ * free joint (src/solve/aba.c; S = 1), exact here: the angular
+ * accelerations and forces asserted to 0, the linear ones to R^T g within
+ * 1e-14 |g| (the frame's rotation). The DCA agrees to rounding (its
+ * inverse-inertia factor works at the centre of mass). Free joints hang
+ * from the world only (aqs_joint_add). */
+static void test_free_fall_exact(void **state)
+{
+    static const double ks[] = {1e-6, 1e-10, 1e-12, 1e-14, 1e-16}, ms[] = {0.75, 1e9, 1e16};
+    const double g[3] = {0.3, -9.81, 1.2}, zero[3] = {0, 0, 0}, c[3] = {0.3, -0.1, 0.2};
+    size_t a, b;
+    int32_t solver, i;
+    (void)state;
+    for (a = 0; a < sizeof ks / sizeof ks[0]; a++)
+        for (b = 0; b < sizeof ms / sizeof ms[0]; b++)
+            for (solver = AQS_EXACT_ABA; solver <= AQS_EXACT_DCA; solver++) {
+                aqs_linkage *L = test_new_linkage();
+                const double k = ks[a], I[9] = {k, 0, 0, 0, 2 * k, 0, 0, 0, 1.5 * k};
+                const double n = sqrt(0.8 * 0.8 + 0.2 * 0.2 + 0.4 * 0.4 + 0.4 * 0.4);
+                const double q[7] = {0.1, -0.2, 0.3, 0.8 / n, 0.2 / n, -0.4 / n, 0.4 / n}; /* a turned frame */
+                double qdd[6], f[6], R[9], gl[3], pos[3], qt[4];
+                assert_int_equal(aqs_body_add(L, ms[b], c, I, NULL), AQS_OK);
+                assert_int_equal(aqs_joint_add(L, AQS_JOINT_FREE, AQS_WORLD, 0, zero, q + 3, NULL, NULL), AQS_OK);
+                assert_int_equal(aqs_linkage_set_exact_solver(L, solver), AQS_OK);
+                assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+                assert_int_equal(aqs_linkage_set_positions(L, q, 7), AQS_OK);
+                assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+                assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+                assert_int_equal(aqs_linkage_get_accelerations(L, qdd, 6), AQS_OK);
+                assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6), AQS_OK);
+                /* qdd = [alpha; a_O] in the body frame: alpha = 0, a_O = R^T g */
+                assert_int_equal(aqs_body_get_pose_world(L, 0, pos, qt), AQS_OK);
+                {
+                    const double w = qt[0], x = qt[1], y = qt[2], z = qt[3];
+                    R[0] = 1 - 2 * (y * y + z * z), R[1] = 2 * (x * y - w * z), R[2] = 2 * (x * z + w * y);
+                    R[3] = 2 * (x * y + w * z), R[4] = 1 - 2 * (x * x + z * z), R[5] = 2 * (y * z - w * x);
+                    R[6] = 2 * (x * z - w * y), R[7] = 2 * (y * z + w * x), R[8] = 1 - 2 * (x * x + y * y);
+                }
+                for (i = 0; i < 3; i++) gl[i] = R[i] * g[0] + R[3 + i] * g[1] + R[6 + i] * g[2];
+                for (i = 0; i < 3; i++) {
+                    /* the ABA exactly; the DCA to rounding (angular accelerations of
+                     * |g| / |c| scale; measured 8.4e-26 at k = 1e-6, 0 elsewhere) */
+                    assert_true(solver == AQS_EXACT_ABA ? qdd[i] == 0.0 : fabs(qdd[i]) <= 1e-14 * 9.81 / 0.3);
+                    assert_true(fabs(qdd[3 + i] - gl[i]) <= 1e-14 * 9.81);
+                }
+                for (i = 0; i < 6; i++)
+                    assert_true(solver == AQS_EXACT_ABA ? f[i] == 0.0 : fabs(f[i]) <= 1e-14 * ms[b] * 9.81);
+                aqs_linkage_destroy(L);
+            }
+}
+
 /* set_positions on a finalized linkage of scalar coordinates checks every
  * value in one pass: a non-finite one is refused with the joint and value
  * named, and no position changes. */
@@ -577,6 +636,7 @@ int main(void)
         cmocka_unit_test(test_no_tree_poses),
         cmocka_unit_test(test_reverse_numbered_chain),
         cmocka_unit_test(test_set_positions_refused),
+        cmocka_unit_test(test_free_fall_exact),
         cmocka_unit_test(test_failed_solve_then_solve),
     };
     return cmocka_run_group_tests_name("aba", tests, NULL, NULL);

@@ -486,6 +486,21 @@ int dense_joint_space_inverse(const double *S, const double *U, int d, double *D
     return dense_spd_inverse(D, Dinv, d);
 }
 
+void dense_free_accel(const double *Dinv, const double *u, double *ac, double *qdd)
+{
+    double w[6];
+    int i, j;
+    for (j = 0; j < 6; j++) {
+        double v = 0.0;
+        for (i = 0; i < 6; i++) v += Dinv[6 * j + i] * u[i];
+        w[j] = v;
+    }
+    for (j = 0; j < 6; j++) {
+        qdd[j] = w[j] - ac[j];
+        ac[j] = w[j];
+    }
+}
+
 void dense_joint_accel(const double *S, const double *U, const double *Dinv, int d, const double *u, double *ac,
                        double *qdd)
 {

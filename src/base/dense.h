@@ -27,6 +27,11 @@ int dense_spd_inverse(const double *A, double *out, int n);
 int dense_joint_space_inverse(const double *S, const double *U, int d, double *Dinv);
 /* A joint's accelerations from its articulated factors (S, U as above, Dinv
  * d x d): qdd = Dinv (u - U ac), then ac += S qdd. qdd may alias u. */
+/* The same for a free joint (S = 1, d = 6): D^-1 U^T = 1, so qdd = Dinv u - ac
+ * and then ac = Dinv u, without the product D^-1 (U^T ac), which loses
+ * cond(D) u of ac (a free near point mass whose centre of mass is off its
+ * frame's origin, in free fall: 4 rad/s^2 for 0). qdd may alias u. */
+void dense_free_accel(const double *Dinv, const double *u, double *ac, double *qdd);
 void dense_joint_accel(const double *S, const double *U, const double *Dinv, int d, const double *u, double *ac,
                        double *qdd);
 

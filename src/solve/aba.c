@@ -482,7 +482,8 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
     const int d = joint_nv(jt->type);
     joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
     (void)dense_joint_space_inverse(S, U, d, Dinv); /* succeeded in the backward pass */
-    dense_joint_accel(S, U, Dinv, d, u, ac, L->qdd + jt->voff);
+    if (jt->type == AQS_JOINT_FREE) dense_free_accel(Dinv, u, ac, L->qdd + jt->voff);
+    else dense_joint_accel(S, U, Dinv, d, u, ac, L->qdd + jt->voff);
 }
 
 /* The forward pass. With check, it also returns the bodies' balance of
@@ -539,8 +540,12 @@ static double forward(aqs_linkage *L, int check)
         } else {
             forward_general(L, jt, nd, ac);
         }
-        kin_inertia_mul(nd->IA, ac, f);
-        for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        if (jt->type == AQS_JOINT_FREE) { /* S = 1: the joint force is Q, exactly */
+            memcpy(f, L->tau + jt->voff, 6 * sizeof(double));
+        } else {
+            kin_inertia_mul(nd->IA, ac, f);
+            for (i = 0; i < 6; i++) f[i] += nd->pA[i];
+        }
         /* the balance of forces (the linear rows): this body's terms, its
          * children's forces added at their turns */
         if (check) {

@@ -185,7 +185,8 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
             const double *U = a->Um + 6 * a->moff[k];
             joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
             (void)dense_joint_space_inverse(S, U, d, Dinv);
-            dense_joint_accel(S, U, Dinv, d, q, ac, q); /* q holds u from the backward pass */
+            if (jt->type == AQS_JOINT_FREE) dense_free_accel(Dinv, q, ac, q); /* q holds u */
+            else dense_joint_accel(S, U, Dinv, d, q, ac, q); /* q holds u from the backward pass */
         }
     }
 }
