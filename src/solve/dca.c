@@ -60,6 +60,20 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     tree *t = &L->t;
     int32_t n;
     if (t->data) return AQS_OK;
+    /* The DCA multiplies masses together (the two-body rule's m_A m_B / m,
+     * the mass properties' factors): below 1e-150 such a product underflows,
+     * and with subnormals flushed (src/base/fpenv.c) becomes 0, so a pendulum
+     * of 1e-155 kg came out at rest, certified; above 1e150 it overflows.
+     * The articulated-body solver takes any positive mass. */
+    for (n = 0; n < L->nbodies; n++) {
+        const double m = L->bodies[n].mass;
+        if (!(m >= DCA_MASS_MIN && m <= DCA_MASS_MAX))
+            return lk_fail(L, AQS_EINVAL,
+                           "%s: body %d has mass %g, outside [1e-150, 1e150], where the DCA (a tolerance, a cap "
+                           "or AQS_EXACT_DCA) computes: products of masses would underflow or overflow; "
+                           "the articulated-body solver (the default exact solver) takes it",
+                           fn, (int)n, m);
+    }
     if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     if (!t->rnd_node && !(t->rnd_node = lk_calloc_in(L, LK_MEM_DCA, 5 * (size_t)t->nnodes + 1, sizeof(double))))

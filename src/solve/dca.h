@@ -11,8 +11,13 @@
 /* Allocate the tree's DCA coefficients (mass properties, Lambda or Phi, b,
  * handle forces, FX, QX, ...) and set up the leaves, once: a linkage solved
  * only exactly by the articulated-body algorithm never needs them. Marks
- * every node stale. AQS_OK or AQS_ENOMEM (message naming fn). */
+ * every node stale. AQS_OK, AQS_EINVAL (a body's mass outside [DCA_MASS_MIN,
+ * DCA_MASS_MAX]) or AQS_ENOMEM (message naming fn). */
 aqs_status dca_enable(aqs_linkage *L, const char *fn);
+/* The masses the DCA computes with (dca_enable refuses others, AQS_EINVAL):
+ * products of two stay normal numbers. */
+#define DCA_MASS_MIN 1e-150
+#define DCA_MASS_MAX 1e150
 /* Leaf Phi of the inverse-inertia form, in the node's Lambda storage. */
 void dca_phi_leaf(aqs_linkage *L, int32_t n);
 /* Leaf b from the composite's external load (world leaf: from gravity). */
