@@ -693,8 +693,9 @@ typedef struct aqs_solve_stats {
     int32_t certified;       /**< 1: error_bound + rounding_bound is a bound (an estimate with a
                                   safety factor, docs/math.md) and rounding_bound <= eps (eps > 0);
                                   0: no honest bound (rounding above eps, a near-singular pivot, the
-                                  inverse-inertia form, a world measure (not estimated), or an exact
-                                  solve by the ABA, which does not estimate its rounding) */
+                                  inverse-inertia form, a world measure whose estimate is unusable
+                                  (docs/api.md), or an exact solve by the ABA, which does not
+                                  estimate its rounding) */
     int32_t rounding_fallback; /**< 1 if the last solve was exact because of the rounding fallback
                                     (aqs_linkage_set_rounding_fallback) */
 } aqs_solve_stats;

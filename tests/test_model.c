@@ -156,6 +156,25 @@ static void test_inertia_definite(void **state)
     assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
     test_assert_contains(aqs_linkage_last_error(L), "singular inertia");
     aqs_linkage_destroy(L);
+
+    /* A definite inertia whose centre of mass lies 1e10 m from its frame: the
+     * 6 x 6 spatial inertia there does not factor. The message says why (it
+     * said "a singular inertia" until 2026-12-05); 1e8 m is accepted. */
+    {
+        const double I3[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1}, far[3] = {1e10, 0, 0}, near[3] = {1e8, 0, 0};
+        L = test_new_linkage();
+        assert_int_equal(aqs_body_add(L, 2.0, far, I3, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+        assert_int_equal(aqs_linkage_finalize(L), AQS_EMODEL);
+        test_assert_contains(aqs_linkage_last_error(L), "inertia about its centre of mass is definite");
+        test_assert_contains(aqs_linkage_last_error(L), "the centre of mass lies 1e+10 from the frame's origin");
+        aqs_linkage_destroy(L);
+        L = test_new_linkage();
+        assert_int_equal(aqs_body_add(L, 2.0, near, I3, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, pos, quat, axis, NULL), AQS_OK);
+        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+        aqs_linkage_destroy(L);
+    }
 }
 
 static void test_inertia_triangle(void **state)

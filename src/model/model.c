@@ -455,14 +455,25 @@ aqs_status model_build(aqs_linkage *L)
     for (i = 0; i < m->ncomp; i++) {
         double mass = m->comp_inertia[36 * i + 21]; /* the (3,3) entry is the total mass */
         double inv[36];
-        if (!(mass > 0.0) || !rotational_inertia_definite(cmass + 13 * i) ||
-            dense_spd_inverse(m->comp_inertia + 36 * i, inv, 6) != 0) {
+        const int definite = mass > 0.0 && rotational_inertia_definite(cmass + 13 * i);
+        if (!definite || dense_spd_inverse(m->comp_inertia + 36 * i, inv, 6) != 0) {
             const char *name = lk_body_name(L, m->comp_root[i]);
             int32_t count = 0;
             for (k = 0; k < nb; k++) count += m->comp_of_body[k] == i;
             char group[64];
             if (count > 1) snprintf(group, sizeof group, "with %d more welded to it by fixed joints", (int)count - 1);
             else snprintf(group, sizeof group, "welded to no other body");
+            if (definite) { /* the inertia is fine: its frame is too far from it */
+                const double *c = cmass + 13 * i + 1;
+                st = lk_fail(L, AQS_EMODEL,
+                             "aqs_linkage_finalize: body %d%s%s%s (%s): its spatial inertia in its frame is "
+                             "numerically singular although its inertia about its centre of mass is definite: "
+                             "the centre of mass lies %g from the frame's origin, too far for its radius of "
+                             "gyration (the solvers work in that frame: place the joint nearer the centre of mass)",
+                             (int)m->comp_root[i], name ? " '" : "", name ? name : "", name ? "'" : "", group,
+                             sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]));
+                goto fail;
+            }
             st = lk_fail(L, AQS_EMODEL,
                          "aqs_linkage_finalize: body %d%s%s%s (%s) has %s (total mass %g); every "
                          "rigid group that moves needs mass and a positive definite inertia: a "

@@ -86,6 +86,23 @@ def test_indices_are_integers(L, value):
         L.joint_layout(value)
 
 
+@pytest.mark.parametrize("value", [2.7, "3", True, None], ids=repr)
+def test_exact_refinement_count_is_an_integer(L, value):
+    # int(value) took 2.7 as 2, "3" as 3, True as 1, and None raised a bare
+    # TypeError naming nothing (found from outside, 2026-12-05)
+    with pytest.raises(TypeError, match="aqs_linkage_set_exact_refinement: max_corrections must be an integer"):
+        L.set_exact_refinement(value)
+    assert L.exact_refinement == 3  # unchanged
+
+
+@pytest.mark.parametrize("value", [2 ** 32 + 1, 2 ** 70, -2 ** 40], ids=repr)
+def test_exact_refinement_count_fits_int32(L, value):
+    # 2**32 + 1 was passed on as 1 and 2**70 as 0 (the refinement off)
+    with pytest.raises(aqs.RangeError, match="max_corrections"):
+        L.set_exact_refinement(value)
+    assert L.exact_refinement == 3
+
+
 def test_numpy_integers_are_indices(L):
     assert L.joint_layout(np.int64(1)) == L.joint_layout(1) == L.joint_layout(np.uint8(1))
 

@@ -1126,7 +1126,8 @@ class Linkage:
         solver) likewise takes at most max_corrections corrections where its
         balance of forces says it lost digits, and 0 turns that check off
         (docs/math.md 5b). Any phase."""
-        self._call("aqs_linkage_set_exact_refinement", int(max_corrections))
+        f = "aqs_linkage_set_exact_refinement"
+        self._call(f, _index(max_corrections, f, "max_corrections"))
 
     @property
     def exact_refinement(self):
