@@ -824,6 +824,21 @@ static void test_dca_mass_range(void **state)
         }
         aqs_linkage_destroy(L);
     }
+    /* a massless body welded to a massive one is not refused */
+    {
+        aqs_linkage *L = test_new_linkage();
+        const double com[3] = {0.5, 0, 0}, I[9] = {0.01, 0, 0, 0, 0.1, 0, 0, 0, 0.1}, Z[9] = {0};
+        const double zero[3] = {0, 0, 0}, quat[4] = {1, 0, 0, 0}, axis[3] = {0, 0, 1};
+        assert_int_equal(aqs_body_add(L, 1.0, com, I, NULL), AQS_OK);
+        assert_int_equal(aqs_body_add(L, 0.0, com, Z, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_REVOLUTE, AQS_WORLD, 0, zero, quat, axis, NULL), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, AQS_JOINT_FIXED, 0, 1, com, quat, NULL, NULL), AQS_OK);
+        assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+        assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+        assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        aqs_linkage_destroy(L);
+    }
 }
 
 /* ------------------------------------------------- positions, reading */

@@ -64,10 +64,11 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
      * the mass properties' factors): below 1e-150 such a product underflows,
      * and with subnormals flushed (src/base/fpenv.c) becomes 0, so a pendulum
      * of 1e-155 kg came out at rest, certified; above 1e150 it overflows.
-     * The articulated-body solver takes any positive mass. */
+     * The articulated-body solver takes any positive mass. A massless body
+     * (welded to a massive one) adds nothing and is fine. */
     for (n = 0; n < L->nbodies; n++) {
         const double m = L->bodies[n].mass;
-        if (!(m >= DCA_MASS_MIN && m <= DCA_MASS_MAX))
+        if (m != 0.0 && !(m >= DCA_MASS_MIN && m <= DCA_MASS_MAX))
             return lk_fail(L, AQS_EINVAL,
                            "%s: body %d has mass %g, outside [1e-150, 1e150], where the DCA (a tolerance, a cap "
                            "or AQS_EXACT_DCA) computes: products of masses would underflow or overflow; "

@@ -14,8 +14,8 @@
  * every node stale. AQS_OK, AQS_EINVAL (a body's mass outside [DCA_MASS_MIN,
  * DCA_MASS_MAX]) or AQS_ENOMEM (message naming fn). */
 aqs_status dca_enable(aqs_linkage *L, const char *fn);
-/* The masses the DCA computes with (dca_enable refuses others, AQS_EINVAL):
- * products of two stay normal numbers. */
+/* The masses the DCA computes with besides 0 (dca_enable refuses others,
+ * AQS_EINVAL): products of two stay normal numbers. */
 #define DCA_MASS_MIN 1e-150
 #define DCA_MASS_MAX 1e150
 /* Leaf Phi of the inverse-inertia form, in the node's Lambda storage. */
