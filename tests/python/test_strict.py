@@ -137,6 +137,15 @@ def test_status_string_takes_an_int():
 
 # -- input arrays -----------------------------------------------------------------------------------
 
+def test_python_ints_beyond_64_bits_are_numbers(L):
+    # numpy holds 10**20 as an object: it was refused as "dtype object"
+    # (found from outside, 2026-12-05); it is a real number, taken as float()
+    L.set_gravity([0, 0, 10 ** 20])
+    L.set_gravity([0, -(10 ** 19), 0])
+    with pytest.raises(aqs.InvalidArgument, match="gravity holds an integer too large for a double"):
+        L.set_gravity([0, 0, 10 ** 400])
+
+
 @pytest.mark.parametrize("values", [("0", "0", "0"), "0 0 0", np.zeros(3, dtype=bool),
                                     np.zeros(3, dtype=complex), [0, None, 0],
                                     np.array([0, 0, 0], dtype=object) + 0.5j],

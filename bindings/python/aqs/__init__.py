@@ -284,6 +284,16 @@ def _array(values, function, name, shapes=((-1,),)):
     except (TypeError, ValueError) as exc:  # ragged nested sequences, odd objects
         raise SizeError("%s: %s is not a rectangular array of numbers (%s)"
                         % (function, name, exc)) from None
+    if array.dtype.kind == "O" and array.size and all(
+            isinstance(v, numbers.Integral) and not isinstance(v, _BOOLS) for v in array.flat):
+        # Python ints beyond 64 bits (10**20): numpy keeps them as objects;
+        # they are real numbers, converted as float() would (an int too large
+        # for a double raises OverflowError, not a silent inf)
+        try:
+            array = np.array([float(v) for v in array.flat], dtype=_F64).reshape(array.shape)
+        except OverflowError:
+            raise InvalidArgument("%s: %s holds an integer too large for a double"
+                                  % (function, name)) from None
     if array.dtype.kind not in _REAL_KINDS:
         raise TypeError("%s: %s must be an array of real numbers (int or float), got dtype %s"
                         % (function, name, array.dtype))
