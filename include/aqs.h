@@ -664,7 +664,8 @@ AQS_API aqs_status aqs_linkage_get_auto(const aqs_linkage *linkage, int32_t *ena
  *  solve or refine, before anything changes positions or loads; otherwise
  *  AQS_ESTATE. eps >= the bound already reached does nothing. The cap of
  *  aqs_linkage_set_max_computed still applies. Returns AQS_OK, AQS_EINVAL,
- *  AQS_ESTATE. */
+ *  AQS_ESTATE, AQS_ENUMERIC (a result came out non-finite: the results are
+ *  then unreadable, as after a failed solve). */
 AQS_API aqs_status aqs_linkage_refine(aqs_linkage *linkage, double eps);
 
 /** Statistics of the last solve. The caller sets size = sizeof(aqs_solve_stats);
