@@ -526,7 +526,7 @@ AQS_API aqs_status aqs_linkage_finalize(aqs_linkage *L)
     /* The tree's poses when collision needs them at once, or the leaves'
      * (welded bodies' forces after an exact solve); otherwise when a setter
      * first chooses the DCA or a tolerance (dca_enable) or a shape is added. */
-    if ((L->col && L->col->nshapes > 0 && frames_poses(L) != AQS_OK) || (L->m.nwelded > 0 && frames_poses_alloc(L) != AQS_OK) ||
+    if ((collide_has_shapes(L) && frames_poses(L) != AQS_OK) || (L->m.nwelded > 0 && frames_poses_alloc(L) != AQS_OK) ||
         shrink_building_arrays(L) != 0) {
         free_solver(L);
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory", fn);

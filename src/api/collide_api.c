@@ -308,7 +308,7 @@ AQS_API aqs_status aqs_linkage_any_contact(aqs_linkage *L, int32_t *hit)
     if (!L) return AQS_EINVAL;
     if (!hit) return lk_fail(L, AQS_EINVAL, "%s: hit is NULL", fn);
     if ((st = prepare(L, fn)) != AQS_OK) return st;
-    *hit = L->col && L->col->nshapes > 0 && broadphase_query(L, AQS_COLLIDE_LAZY, NULL, 0, 1) > 0;
+    *hit = collide_has_shapes(L) && broadphase_query(L, AQS_COLLIDE_LAZY, NULL, 0, 1) > 0;
     return AQS_OK;
 }
 

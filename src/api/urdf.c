@@ -958,11 +958,11 @@ static aqs_status check_call(aqs_linkage *L, const char *fn, const aqs_urdf_opti
     if (o->finalize != 0 && o->finalize != 1)
         return lk_fail(L, AQS_EINVAL, "%s: options->finalize = %d must be 0 or 1", fn,
                        (int)o->finalize);
-    if (L->finalized || L->nbodies || L->njoints || (L->col && L->col->nshapes > 0))
+    if (L->finalized || L->nbodies || L->njoints || collide_has_shapes(L))
         return lk_fail(L, AQS_ESTATE,
                        "%s: the linkage must be empty (it has %d bodies, %d joints%s%s); load "
                        "into a new one",
-                       fn, (int)L->nbodies, (int)L->njoints, L->col && L->col->nshapes > 0 ? ", shapes" : "",
+                       fn, (int)L->nbodies, (int)L->njoints, collide_has_shapes(L) ? ", shapes" : "",
                        L->finalized ? ", finalized" : "");
     return AQS_OK;
 }

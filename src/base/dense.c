@@ -489,12 +489,8 @@ int dense_joint_space_inverse(const double *S, const double *U, int d, double *D
 void dense_free_accel(const double *Dinv, const double *u, double *ac, double *qdd)
 {
     double w[6];
-    int i, j;
-    for (j = 0; j < 6; j++) {
-        double v = 0.0;
-        for (i = 0; i < 6; i++) v += Dinv[6 * j + i] * u[i];
-        w[j] = v;
-    }
+    int j;
+    dense_matvec6(Dinv, u, w);
     for (j = 0; j < 6; j++) {
         qdd[j] = w[j] - ac[j];
         ac[j] = w[j];

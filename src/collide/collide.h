@@ -64,6 +64,11 @@ typedef struct collision {
     int32_t certs_reused, certs_made, near_tests; /* internal (tests, bench) */
 } collision;
 
+/* A linkage holds shapes: from its first shape on the tree's poses follow
+ * every move (a linkage with collision settings and no shape pays nothing
+ * per move, and counts as empty for the URDF loader). */
+static inline int collide_has_shapes(const aqs_linkage *L) { return L->col && L->col->nshapes > 0; }
+
 void collide_free(aqs_linkage *L);
 /* Forget the built data (shapes changed). */
 void broadphase_reset(aqs_linkage *L);

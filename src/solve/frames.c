@@ -106,7 +106,7 @@ void frames_node(aqs_linkage *L, int32_t n)
     for (i = 0; i < B->nh; i++)
         if (i != C->kb) compose(&Pk, &PB[i], &P[ci++]);
     AQS_ASSERT(ci == C->nh && C->nh == A->nh + B->nh - 2); /* the joined handles drop out */
-    if (L->col && L->col->nshapes > 0) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
+    if (collide_has_shapes(L)) broadphase_node_moved(L, n); /* collision: refit its bounding sphere */
 }
 
 /* All internal nodes' cross poses, children first. O(N). */
@@ -126,7 +126,7 @@ void frames_from_joint(aqs_linkage *L, int32_t e)
 
 void frames_positions_moved(aqs_linkage *L)
 {
-    if (L->col && L->col->nshapes > 0) frames_all(L); /* shapes follow every move */
+    if (collide_has_shapes(L)) frames_all(L); /* shapes follow every move */
     else stale_poses(L);
     stale_positions(L, -1);
 }
