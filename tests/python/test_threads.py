@@ -82,9 +82,12 @@ print("ok")
 # The lock is fair: a call from a second thread waits for the step running
 # when it asked, not for the stepping thread's whole loop (threading.RLock
 # let the stepper take the lock back at once: close() waited for 182 of 300
-# steps, 0.36 s; with 2,000 exact DCA steps, 269 s). At most 2 steps finish
-# while a call waits: the one running when it asked, and one more if the
-# stepper took the lock again between the count's read and the call's request.
+# steps, 0.36 s; with 2,000 exact DCA steps, 269 s; here 1,374 for the first
+# read). With the fair lock at most 2 steps finish while a call waits: the one
+# running when it asked, and one more if the stepper took the lock again
+# between the count's read and the call's request; measured 0 .. 1. Asserted
+# at 20, so that a reader thread the OS deschedules between the count's read
+# and its call (a loaded machine, sanitizers) cannot fail it.
 FAIR_LOCK = COMMON + r"""
 for rep in range(3):
     L = chain(3000)
@@ -112,7 +115,7 @@ for rep in range(3):
         L.close()
         waits.append(steps[0] - k)
     run_threads(stepper, reader_then_closer)
-    assert max(waits) <= 2, waits
+    assert max(waits) <= 20, waits
 print("ok")
 """
 
