@@ -85,7 +85,7 @@ print("ok")
 # steps, 0.36 s; with 2,000 exact DCA steps, 269 s; here 1,374 for the first
 # read). With the fair lock at most 2 steps finish while a call waits: the one
 # running when it asked, and one more if the stepper took the lock again
-# between the count's read and the call's request; measured 0 .. 1. Asserted
+# between the count's read and the call's request; measured 1 every time. Asserted
 # at 20, so that a reader thread the OS deschedules between the count's read
 # and its call (a loaded machine, sanitizers) cannot fail it.
 FAIR_LOCK = COMMON + r"""
