@@ -122,11 +122,13 @@ typedef struct {
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
                           allocated by dca_enable */
-    double *rnd_node;  /* 5 per node, allocated by dca_enable (src/solve/rounding.c, docs/math.md
-                          "The rounding term"): relative error levels in units of u, RND_K of the
-                          node's reduced factors (U, E, QX, FX), RND_KB of its b; absolute errors
-                          (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB the largest rho
-                          error in the subtree */
+    double *rnd_node;  /* RND_NODE_LEVELS (6) per node, allocated by dca_enable (src/solve/rounding.c,
+                          docs/math.md "The rounding term"): relative error levels in units of u,
+                          RND_K of the node's reduced factors (U, E, QX, FX), RND_KB of its b;
+                          absolute errors (2-norms) RND_RHO of rho and RND_GAM of gamma; RND_SUB
+                          the largest rho error in the subtree; RND_TQ its joint acceleration's
+                          error from the rounding of its parent's force transform, set by the
+                          parent's back-substitution */
     double *lf;         /* the load factors (src/solve/dca.c dca_loads_enable), at lfoff per
                            internal node, valid where lfok; NULL unless an adaptive solve
                            was refined (src/solve/arefine.c) */

@@ -137,8 +137,8 @@ static void save_node(aqs_linkage *L, int32_t n, int dir, int with_x)
         else memcpy(sv, rg, ng * sizeof(double));
         sv += ng;
         if (t->rnd_node) {
-            if (dir) memcpy(t->rnd_node + 5 * (size_t)n, sv, 5 * sizeof(double));
-            else memcpy(sv, t->rnd_node + 5 * (size_t)n, 5 * sizeof(double));
+            if (dir) memcpy(t->rnd_node + RND_NODE_LEVELS * (size_t)n, sv, RND_NODE_LEVELS * sizeof(double));
+            else memcpy(sv, t->rnd_node + RND_NODE_LEVELS * (size_t)n, RND_NODE_LEVELS * sizeof(double));
         }
     }
 }
@@ -298,7 +298,7 @@ int arefine_alloc(aqs_linkage *L)
     L->arf = R;
     for (k = 0; k < t->nnodes; k++) {
         const node *nd = &t->nodes[k];
-        off += 12 * (int64_t)nd->nh + (nd->joint >= 0 ? (int64_t)nd->d + 6 + 5 : 0);
+        off += 12 * (int64_t)nd->nh + (nd->joint >= 0 ? (int64_t)nd->d + 6 + RND_NODE_LEVELS : 0);
     }
     R->save = lk_calloc_in(L, LK_MEM_DCA, (size_t)off + 1, sizeof(double));
     R->soff = lk_calloc_in(L, LK_MEM_DCA, nn, sizeof(int64_t));
@@ -318,7 +318,7 @@ int arefine_alloc(aqs_linkage *L)
     for (k = 0; k < t->nnodes; k++) {
         const node *nd = &t->nodes[k];
         R->soff[k] = off;
-        off += 12 * (int64_t)nd->nh + (nd->joint >= 0 ? (int64_t)nd->d + 6 + 5 : 0);
+        off += 12 * (int64_t)nd->nh + (nd->joint >= 0 ? (int64_t)nd->d + 6 + RND_NODE_LEVELS : 0);
     }
     return 0;
 }

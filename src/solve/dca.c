@@ -77,7 +77,7 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
     }
     if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
-    if (!t->rnd_node && !(t->rnd_node = lk_calloc_in(L, LK_MEM_DCA, 5 * (size_t)t->nnodes + 1, sizeof(double))))
+    if (!t->rnd_node && !(t->rnd_node = lk_calloc_in(L, LK_MEM_DCA, RND_NODE_LEVELS * (size_t)t->nnodes + 1, sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     { /* the adaptive solver's per-node arrays (src/solve/adaptive.c), not held by a
          linkage solved only by the articulated-body algorithm */

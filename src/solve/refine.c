@@ -36,6 +36,7 @@
 #include "arefine.h"
 #include "dca.h"
 #include "residual.h"
+#include "rounding.h"
 
 /* The size of a step (units of u, relative) after which no further one is
  * tried (resolved below): REFINE_LEVEL for a cycle's first step (the plain
@@ -128,7 +129,7 @@
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
-                       gamma (d + 6), then 5 rounding levels */
+                       gamma (d + 6), then RND_NODE_LEVELS rounding levels */
     double *r, *r2; /* nv: the residual of the accepted and of the candidate accelerations */
     double *dq;     /* nv: the correction */
     double *q1;     /* nv: the candidate */
@@ -172,7 +173,7 @@ static int refine_alloc(aqs_linkage *L)
     if (L->rf) return 0;
     for (k = 0; k < t->nnodes; k++) {
         const node *nd = &t->nodes[k];
-        n += 12 * (size_t)nd->nh + (nd->joint >= 0 ? (size_t)nd->d + 6 + 5 : 0);
+        n += 12 * (size_t)nd->nh + (nd->joint >= 0 ? (size_t)nd->d + 6 + RND_NODE_LEVELS : 0);
     }
     R = lk_calloc_in(L, LK_MEM_DCA, 1, sizeof *R);
     if (!R) return -1;
@@ -247,10 +248,10 @@ static void save_loads(aqs_linkage *L, int dir)
             else memcpy(s, rg, ng * sizeof(double));
             s += ng;
             if (t->rnd_node) {
-                if (dir) memcpy(t->rnd_node + 5 * (size_t)k, s, 5 * sizeof(double));
-                else memcpy(s, t->rnd_node + 5 * (size_t)k, 5 * sizeof(double));
+                if (dir) memcpy(t->rnd_node + RND_NODE_LEVELS * (size_t)k, s, RND_NODE_LEVELS * sizeof(double));
+                else memcpy(s, t->rnd_node + RND_NODE_LEVELS * (size_t)k, RND_NODE_LEVELS * sizeof(double));
             }
-            s += 5;
+            s += RND_NODE_LEVELS;
         }
     }
 }

@@ -47,8 +47,8 @@
 #endif
 
 /* A node's levels in tree.rnd_node (5 per node). */
-enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB };
-#define RN(t, nd) ((t)->rnd_node + 5 * ((nd) - (t)->nodes))
+enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB, RND_TQ };
+#define RN(t, nd) ((t)->rnd_node + RND_NODE_LEVELS * ((nd) - (t)->nodes))
 
 #define RND_G0 2.0
 /* joint_error keeps the handles' |x_h| of its first loop for its second up to this many handles */
@@ -337,6 +337,46 @@ void rounding_solve_start(aqs_linkage *L)
     s->rnd_ok = t->rnd_x != NULL && t->rnd_node != NULL; /* allocated by dca_enable with the coefficients */
 }
 
+/* The rounding of x_A = -X_J^T f (dca_node_backsub) for A's handle ka,
+ * taken componentwise: each component a sum of three products (3 u |R| |f|),
+ * the torques' p x (R f) with its rounding and the error of R f it carries;
+ * then what it makes of A's joint acceleration through QX_A's entries,
+ * |QX_A| e, into A's RND_TQ (for an internal A; leaves have no joint).
+ * The relative error of f that joint_error carries goes through the
+ * product QX x; this one does not keep f's direction: a large force on a
+ * light part on A's side, nearly orthogonal to that part's mobility (a
+ * light body between two heavy ones, or between a heavy one and the
+ * ground), turns u |f| into an acceleration error however accurate f is
+ * (docs/math.md 10a, "The transport of a force"). */
+static void transport_error(aqs_linkage *L, const node *C, const double *f)
+{
+    tree *t = &L->t;
+    const node *A = &t->nodes[C->a];
+    const pose *J = t->poses + nd_J(C);
+    const double fu = RND_SAFETY * RND_U, *p = J->p;
+    const double *QXa = t->data + nd_U(A);
+    const int32_t rows = 6 * A->nh, o = 6 * C->ka;
+    double e[6], ol[3], el[3], sq = 0.0;
+    int32_t i, r;
+    for (i = 0; i < 3; i++) {
+        const double *R = J->R + 3 * i;
+        ol[i] = fabs(R[0] * f[3] + R[1] * f[4] + R[2] * f[5]);
+        el[i] = 3.0 * fu * (fabs(R[0] * f[3]) + fabs(R[1] * f[4]) + fabs(R[2] * f[5]));
+        e[3 + i] = el[i];
+        e[i] = 3.0 * fu * (fabs(R[0] * f[0]) + fabs(R[1] * f[1]) + fabs(R[2] * f[2]));
+    }
+    e[0] += 2.0 * fu * (fabs(p[1]) * ol[2] + fabs(p[2]) * ol[1]) + fabs(p[1]) * el[2] + fabs(p[2]) * el[1];
+    e[1] += 2.0 * fu * (fabs(p[2]) * ol[0] + fabs(p[0]) * ol[2]) + fabs(p[2]) * el[0] + fabs(p[0]) * el[2];
+    e[2] += 2.0 * fu * (fabs(p[0]) * ol[1] + fabs(p[1]) * ol[0]) + fabs(p[0]) * el[1] + fabs(p[1]) * el[0];
+    for (r = 0; r < A->d; r++) {
+        const double *q = QXa + (int64_t)r * rows + o;
+        const double a = fabs(q[0]) * e[0] + fabs(q[1]) * e[1] + fabs(q[2]) * e[2] + fabs(q[3]) * e[3] +
+                         fabs(q[4]) * e[4] + fabs(q[5]) * e[5];
+        sq += a * a;
+    }
+    RN(t, A)[RND_TQ] = sqrtn(sq);
+}
+
 /* The estimated error (2-norm) of node n's joint acceleration from its
  * handle forces; with set, also the children's handle-force errors. Only
  * the internal children's are set unless the world measures are active:
@@ -403,6 +443,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
          * trigger: the estimate of the accelerations does not cover them). */
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const int all = worldbound_active(L), setA = all || A->joint >= 0, setB = all || B->joint >= 0;
+        if (A->joint >= 0) transport_error(L, C, L->cforce + 6 * L->m.eff_joint[C->joint]);
         {
             const double fn = n6f(L->cforce + 6 * L->m.eff_joint[C->joint], il);
             double ef = RN(t, C)[RND_GAM], sf = n6f(t->data + nd_gamma(C), il), *exA = t->rnd_x + A->handles,
@@ -441,7 +482,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 }
         }
     }
-    return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
+    return RN(t, C)[RND_RHO] + RN(t, C)[RND_TQ] + qe + ku * sqrtn(sq);
 }
 
 /* A free joint's estimated error as |(dw, dv / l)| (the world measures'
@@ -480,7 +521,7 @@ static double free_joint_error(const aqs_linkage *L, int32_t n)
         const double v = i >= 3 ? a[i] * il : a[i];
         sq += v * v;
     }
-    return RN(t, C)[RND_RHO] + qe + ku * sqrtn(sq);
+    return RN(t, C)[RND_RHO] + RN(t, C)[RND_TQ] + qe + ku * sqrtn(sq);
 }
 
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
