@@ -443,6 +443,35 @@ void build_altmass(Case &c, int n, double ratio, uint64_t seed) {
     B.gravity(9.81, 0, 0);
 }
 
+// (c') A planar chain of n links (axes all z) with heavy (ratio) and light (1) links: "alt"
+// heavy at odd links, "alt1" at even ones (each light link between two heavy ones or a heavy
+// one and the ground); inertias 0.05 m, centres of mass 0.2 .. 0.8 m along the link, q
+// uniform in (-1, 1), gravity in the plane and a tip force (3, -2) N at 0.9 m. Each light link
+// carries the heavy links' weight nearly along itself: rounding the transform of that force
+// into the light side's frame gives it an acceleration of u |f| / its inertia, which the
+// rounding estimate took for a relative error of f until 2026-12-05 (docs/math.md §10a, "The
+// transport of a force"; found from outside: certified solves 4 .. 584x the rounding bound
+// beyond their bound).
+void build_altplanar(Case &c, int n, double ratio, bool odd, uint64_t seed) {
+    Builder B(c);
+    Rng r(seed);
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < n; ++i) {
+        const double m = (i % 2 == 1) == odd ? ratio : 1.0;
+        const double com[3] = {r.uniform(0.2, 0.8), 0, 0};
+        const int32_t b = B.body(m, com, 0.05 * m, 0.05 * m, 0.05 * m);
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        B.joint(AQS_JOINT_REVOLUTE, prev, b, pos, kQuat1, kAxisZ);
+        prev = b;
+    }
+    B.finalize();
+    std::vector<double> q(n);
+    for (double &x : q) x = r.uniform(-1, 1);
+    B.positions(q);
+    B.gravity(0, -9.81, 0);
+    B.force(prev, 3, -2, 0, 0.9, 0, 0);
+}
+
 // Random tree of n bodies: revolute joints with random axes and frames, parent the previous
 // body with probability 0.7, else a random earlier one; masses 0.5..2 with box inertias. With
 // mass, the masses it draws; with type, each joint's type drawn after its frame and axis.
@@ -749,6 +778,12 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
         for (double ratio : {1e3, 1e6, 1e9})
             add("altmass", "r=" + fmt("%.0e", ratio) + "/n=" + std::to_string(n), n,
                 [=](Case &c) { build_altmass(c, n, ratio, 1); });
+    for (int odd = 0; odd < 2; ++odd)
+        for (double ratio : {1e3, 1e6, 1e9})
+            for (uint64_t seed : {1ull, 2ull, 3ull})
+                add("altmass", std::string("planar/") + (odd ? "alt" : "alt1") + "/r=" + fmt("%.0e", ratio) +
+                    "/n=20/seed=" + std::to_string(seed), 20,
+                    [=](Case &c) { build_altplanar(c, 20, ratio, odd != 0, seed); });
     for (double d : {1e-6, 1e-8, 1e-10, 1e-12})
         for (uint64_t seed : {1ull, 2ull})
             add("near_eq", "delta=" + fmt("%.0e", d) + "/seed=" + std::to_string(seed), 120,
