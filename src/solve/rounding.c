@@ -21,8 +21,10 @@
  * relative error times its share |FX_h x_h|, and F u rk (|gamma| + sum |FX_h
  * x_h|); the child's handle k inherits f's error, the others keep theirs. The
  * joint's acceleration qdd = rho - QX x then has
- *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|,
- * F = RND_SAFETY. A carried level grows by a cancellation ratio r only past
+ *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|
+ *            + (for the parent side A) | |QX_A| e_t |,
+ * F = RND_SAFETY, e_t the componentwise rounding of the transform x_A = -X^T f
+ * (transport_error: it does not keep f's direction). A carried level grows by a cancellation ratio r only past
  * RND_R0 (terms of similar size that combine do not all err the same way);
  * the sum's own rounding adds RND_G0 r. A first-order estimate with a safety
  * factor, not a theorem: tests/reference/hardcases.cpp checks it against the
