@@ -24,8 +24,10 @@
  *   e(qdd) = e(rho) + sum_h e(x_h)/|x_h| |QX_h x_h| + F u rk sum |QX_ik x_k|
  *            + (for the parent side A) | |QX_A| e_t |,
  * F = RND_SAFETY, e_t the componentwise rounding of the transform x_A = -X^T f
- * (transport_error: it does not keep f's direction). A carried level grows by a cancellation ratio r only past
- * RND_R0 (terms of similar size that combine do not all err the same way);
+ * (transport_error: it does not keep f's direction; for queued subtrees the
+ * same of gamma goes into RND_SUB). A carried level grows by a cancellation
+ * ratio r only past RND_R0 (terms of similar size that combine do not all
+ * err the same way);
  * the sum's own rounding adds RND_G0 r. A first-order estimate with a safety
  * factor, not a theorem: tests/reference/hardcases.cpp checks it against the
  * quad reference on every family at every eps 2^-1 .. 2^-30. */
@@ -192,6 +194,8 @@ static void child_levels(const tree *t, const node *c, double *k, double *kb)
     }
 }
 
+static double transport_error(const aqs_linkage *L, const node *C, const double *f);
+
 void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2, const double *E,
                    const double *W, const double *beta, const double *Q, const double *Lc, const double *Tc,
                    int32_t ncol, double gpiv, const double *bo)
@@ -325,7 +329,10 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     RN(t, C)[RND_KB] = kb;
     {
         double sub = RN(t, C)[RND_RHO];
-        if (A->joint >= 0) sub = maxd(sub, RN(t, A)[RND_SUB]);
+        /* and the transport of gamma (C's joint force with its handles free:
+         * the loads inside C) into A's joint, for a C whose children stay
+         * queued: the back-substitution's own term (RND_TQ) needs the force */
+        if (A->joint >= 0) sub = maxd(sub, maxd(RN(t, A)[RND_SUB], transport_error(L, C, t->data + nd_gamma(C))));
         if (B->joint >= 0) sub = maxd(sub, RN(t, B)[RND_SUB]);
         RN(t, C)[RND_SUB] = sub;
     }
@@ -343,16 +350,19 @@ void rounding_solve_start(aqs_linkage *L)
  * taken componentwise: each component a sum of three products (3 u |R| |f|),
  * the torques' p x (R f) with its rounding and the error of R f it carries;
  * then what it makes of A's joint acceleration through QX_A's entries,
- * |QX_A| e, into A's RND_TQ (for an internal A; leaves have no joint).
+ * |QX_A| e (returned; A internal: leaves have no joint). The
+ * back-substitution puts it into A's RND_TQ with C's force; the node update
+ * into C's RND_SUB with gamma, C's force with its handles free, for the
+ * joints of a subtree the adaptive solve leaves queued.
  * The relative error of f that joint_error carries goes through the
  * product QX x; this one does not keep f's direction: a large force on a
  * light part on A's side, nearly orthogonal to that part's mobility (a
  * light body between two heavy ones, or between a heavy one and the
  * ground), turns u |f| into an acceleration error however accurate f is
  * (docs/math.md 10a, "The transport of a force"). */
-static void transport_error(aqs_linkage *L, const node *C, const double *f)
+static double transport_error(const aqs_linkage *L, const node *C, const double *f)
 {
-    tree *t = &L->t;
+    const tree *t = &L->t;
     const node *A = &t->nodes[C->a];
     const pose *J = t->poses + nd_J(C);
     const double fu = RND_SAFETY * RND_U, *p = J->p;
@@ -376,7 +386,7 @@ static void transport_error(aqs_linkage *L, const node *C, const double *f)
                          fabs(q[4]) * e[4] + fabs(q[5]) * e[5];
         sq += a * a;
     }
-    RN(t, A)[RND_TQ] = sqrtn(sq);
+    return sqrtn(sq);
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
@@ -445,7 +455,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
          * trigger: the estimate of the accelerations does not cover them). */
         node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
         const int all = worldbound_active(L), setA = all || A->joint >= 0, setB = all || B->joint >= 0;
-        if (A->joint >= 0) transport_error(L, C, L->cforce + 6 * L->m.eff_joint[C->joint]);
+        if (A->joint >= 0) RN(t, A)[RND_TQ] = transport_error(L, C, L->cforce + 6 * L->m.eff_joint[C->joint]);
         {
             const double fn = n6f(L->cforce + 6 * L->m.eff_joint[C->joint], il);
             double ef = RN(t, C)[RND_GAM], sf = n6f(t->data + nd_gamma(C), il), *exA = t->rnd_x + A->handles,
