@@ -35,6 +35,7 @@
 
 #include <math.h>
 
+#include "dense.h"
 #include "worldbound.h"
 
 #if defined(__SSE2__)
@@ -51,13 +52,15 @@
 #endif
 
 /* A node's levels in tree.rnd_node (5 per node). */
-enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB, RND_TQ };
+enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB, RND_TQ, RND_KP };
 #define RN(t, nd) ((t)->rnd_node + RND_NODE_LEVELS * ((nd) - (t)->nodes))
 
 #define RND_G0 2.0
 /* joint_error keeps the handles' |x_h| of its first loop for its second up to this many handles */
 #define AQS_JE_MAXH 16
 #define RND_R0 8.0
+/* bside_entry_error: a parent composite this many times heavier than the child */
+#define RND_HEAVY 1e3
 
 static double maxd(double a, double b) { return a > b ? a : b; }
 /* sqrt of a sum of squares (>= 0 or NaN): the instruction itself, without
@@ -327,6 +330,12 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
     RN(t, C)[RND_GAM] = fu * kbeta * sqrtn(sgam);
     RN(t, C)[RND_K] = kappa;
     RN(t, C)[RND_KB] = kb;
+    { /* F u |Kp|: G2 = Kp Kp^T (the joint's mobility), its trace; read by
+         * bside_entry_error */
+        double tr = 0.0;
+        for (i = 0; i < d; i++) tr += G2[d * i + i];
+        RN(t, C)[RND_KP] = fu * sqrtn(tr);
+    }
     {
         double sub = RN(t, C)[RND_RHO];
         /* and the transport of gamma (C's joint force with its handles free:
@@ -387,6 +396,77 @@ static double transport_error(const aqs_linkage *L, const node *C, const double 
         sq += a * a;
     }
     return sqrtn(sq);
+}
+
+/* The rounding of QX's entries for the handles C takes from B, where the
+ * joint's child composite is light next to its parent composite (at most
+ * 1/RND_HEAVY of its mass; the world does not count): QX = -Kp X2^T is read
+ * off rows X_o of the stacked matrix after the constraint's reflections, and
+ * each such row carries an absolute error of about u ||X_o|| (the
+ * reflections keep the rows' norms). An entry that comes out small from a
+ * row of large norm is then wrong by about u |Kp| ||X_o||, not by u times
+ * itself: a light link between two heavy ones, whose far handle carries the
+ * heavy link's weight along the light link (docs/math.md 10a, "The rounding
+ * of QX's entries"). ||X_o||^2 is at most the diagonal of B's mobility at
+ * that handle, G I^-1 G^T + Lambda Lambda^T (the rigid part from B's mass
+ * properties and handle pose; none when B is grounded). Measured: without
+ * the light-child condition, or on A's handles, the bound made the
+ * estimates of uniform chains in oblique frames 200-1e4x larger and changed
+ * no failure (the parent's force there comes from the same rounded rows). */
+static double bside_entry_error(const aqs_linkage *L, const node *C, const double *x)
+{
+    const tree *t = &L->t;
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const int32_t nAo = A->nh - 1, rB = B->rank, pc = L->m.eff_parent[C->joint], cc = L->m.eff_child[C->joint];
+    const double *LB = t->data + nd_lam(B), *ic = t->data + nd_ic(B);
+    const pose *PB = t->poses + B->poses;
+    double Ii[9], sum = 0.0, im = 0.0;
+    int32_t ci, k, j, rigid = 0;
+    if (B->grounded || pc == L->m.ncomp || C->nh <= nAo) return 0.0; /* no handle from B, or a heavy world */
+    {
+        const double mp = t->data[nd_ic(&t->nodes[t->leaf_of_comp[pc]])],
+                     mc = t->data[nd_ic(&t->nodes[t->leaf_of_comp[cc]])];
+        if (!(mc > 0.0) || !(mp > RND_HEAVY * mc)) return 0.0;
+    }
+    if (ic[0] > 0.0) {
+        if (dense_spd_inverse(ic + 4, Ii, 3) != 0) return INFINITY;
+        rigid = 1;
+        im = 1.0 / ic[0];
+    }
+    for (ci = nAo; ci < C->nh; ci++) {
+        const int32_t i = ci - nAo < C->kb ? ci - nAo : ci - nAo + 1; /* B's handle */
+        const double *xh = x + 6 * ci;
+        const pose *P = PB + i; /* its pose in B's frame */
+        const double dd[3] = {P->p[0] - ic[1], P->p[1] - ic[2], P->p[2] - ic[3]};
+        for (k = 0; k < 6; k++) {
+            double phi = 0.0;
+            if (xh[k] == 0.0) continue;
+            for (j = 0; j < rB; j++) {
+                const double l = LB[(int64_t)(6 * i + k) * rB + j];
+                phi += l * l;
+            }
+            if (rigid) {
+                const int32_t m = k % 3;
+                const double tv[3] = {P->R[m], P->R[3 + m], P->R[6 + m]}; /* the handle's axis m */
+                double u[3];
+                if (k < 3) { /* a torque about tv: tv^T I^-1 tv */
+                    u[0] = tv[0];
+                    u[1] = tv[1];
+                    u[2] = tv[2];
+                } else { /* a force along tv at the handle: 1/m + (d x tv)^T I^-1 (d x tv) */
+                    u[0] = dd[1] * tv[2] - dd[2] * tv[1];
+                    u[1] = dd[2] * tv[0] - dd[0] * tv[2];
+                    u[2] = dd[0] * tv[1] - dd[1] * tv[0];
+                    phi += im;
+                }
+                phi += u[0] * (Ii[0] * u[0] + Ii[1] * u[1] + Ii[2] * u[2]) +
+                       u[1] * (Ii[3] * u[0] + Ii[4] * u[1] + Ii[5] * u[2]) +
+                       u[2] * (Ii[6] * u[0] + Ii[7] * u[1] + Ii[8] * u[2]);
+            }
+            sum += sqrtn(phi) * fabs(xh[k]);
+        }
+    }
+    return RN(t, C)[RND_KP] * sum;
 }
 
 /* The estimated error (2-norm) of node n's joint acceleration from its
@@ -494,6 +574,7 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
                 }
         }
     }
+    qe += bside_entry_error(L, C, x);
     return RN(t, C)[RND_RHO] + RN(t, C)[RND_TQ] + qe + ku * sqrtn(sq);
 }
 

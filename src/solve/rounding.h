@@ -12,7 +12,7 @@
 #define RND_U 1.1102230246251565e-16
 #define RND_SAFETY 8.0
 /* doubles per tree node in tree.rnd_node (rounding.c) */
-#define RND_NODE_LEVELS 6
+#define RND_NODE_LEVELS 7
 /* Past this relative error level (kappa u) the first-order estimate itself is
  * not trusted: the solve is not certified. */
 #define RND_KAPPA_MAX 1e-3
