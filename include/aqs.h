@@ -950,7 +950,12 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  qdd += ABA^-1(Q - ID(qdd)) by the solve's own factors, each kept only when
  *  it lowers the inverse-dynamics residual (2e-16 .. 5e-14 there); a solve
  *  that kept one takes the inverse dynamics' constraint forces of its
- *  refined accelerations. Elsewhere the answer is bit for bit the
+ *  refined accelerations. On a linkage where some joint's child composite
+ *  is more than 1e3 times heavier than its parent composite, every solve
+ *  takes that residual and tries a correction (the balance, formed with the
+ *  solve's own forces, misses a heavy body held by light links: up to
+ *  1.1e-7 off; 2e-16 refined; such a solve costs about 1.8x: docs/math.md
+ *  5b). Elsewhere the answer is bit for bit the
  *  unrefined one. Its arrays (3 doubles per dof and 12 per joint) are
  *  allocated at the first solve that refines; if that fails, the solve
  *  succeeds unrefined. max_corrections 0 turns the check off too.

@@ -3,6 +3,10 @@
 #ifndef AQS_LINKAGE_H
 #define AQS_LINKAGE_H
 
+/* model.heavy_child: a joint whose child composite is this many times heavier
+ * than its parent composite (docs/math.md 5b) */
+#define AQS_HEAVY_CHILD 1e3
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -175,6 +179,10 @@ typedef struct {
     int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
     int32_t nquat;          /* joints with a quaternion (spherical, free) */
+    unsigned char heavy_child; /* some joint's child composite is more than AQS_HEAVY_CHILD (1e3)
+                               times heavier than its parent composite (model_build): the
+                               articulated-body solve then always checks its residual
+                               (src/solve/aba.c, docs/math.md 5b) */
     double length;          /* the linkage's length scale, m (model_build: the geometric mean
                                of the joints' non-zero offsets in their parents' composites,
                                else of the composites' radii of gyration, else 1): weighs

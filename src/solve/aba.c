@@ -659,7 +659,15 @@ aqs_status aba_solve(aqs_linkage *L)
         L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
         return st;
     }
-    L->s.refined = aba_refine(L, forward(L, L->refine_max > 0));
+    {
+        double bal = forward(L, L->refine_max > 0);
+        /* a heavy child on a light parent: the balance, formed with the
+         * solve's own forces, can miss the light links' mode (docs/math.md
+         * 5b, "Where it loses digits its check does not see"): the residual
+         * decides, a correction kept only where it lowers it */
+        if (L->m.heavy_child && L->refine_max > 0 && bal == bal) bal = fmax(bal, 1.0);
+        L->s.refined = aba_refine(L, bal);
+    }
     L->aba.x_valid = 1;
     aba_welded_forces(L);
     L->aba.x_valid = 0;
