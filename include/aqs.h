@@ -604,7 +604,11 @@ AQS_API aqs_status aqs_linkage_get_rounding_fallback(const aqs_linkage *linkage,
  *  each node update keeps its load factors. Default
  *  AQS_ADAPTIVE_REFINEMENT_LEVEL (1e-10: above the benchmark scenes' estimates
  *  at 2^-19, 3.7e-11 at most, where a refinement would cost 30-40 % of a
- *  step and gain a few u); 0 turns it off. Any phase. Returns AQS_OK,
+ *  step and gain a few u); 0 turns it off. On a linkage where some joint's
+ *  child composite is more than 1e3 times heavier than its parent composite
+ *  the trigger uses level / 1e3 (light links between heavy ones: computed
+ *  joints up to 5e3x the ABA's error under 1e-10; docs/math.md §13c).
+ *  Any phase. Returns AQS_OK,
  *  AQS_EINVAL (level not finite or < 0; nothing changed). */
 #define AQS_ADAPTIVE_REFINEMENT_LEVEL 1e-10
 AQS_API aqs_status aqs_linkage_set_adaptive_refinement(aqs_linkage *linkage, double level);

@@ -435,14 +435,19 @@ static int32_t open_lossy(aqs_linkage *L, heap *h)
 static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
 {
     solve_state *s = &L->s;
+    /* a linkage with a heavy child on a light parent: 1e3 times lower (the
+     * computed joints of planar chains with light links between heavy ones
+     * were up to 5e3x the ABA's error with estimates of 2e-11 .. 5e-11;
+     * docs/math.md §13c) */
+    const double level = L->arf_level * (L->m.heavy_child ? 1.0 / AQS_HEAVY_CHILD : 1.0);
     double pre_r, pre_rel;
     int32_t opened;
     int pre_cert;
     rounding_finish(L);
     s->arefined = 0;
-    if (!(L->arf_level > 0.0) || L->refine_max <= 0 || s->metric >= AQS_METRIC_ABS_WORLD || s->all ||
+    if (!(level > 0.0) || L->refine_max <= 0 || s->metric >= AQS_METRIC_ABS_WORLD || s->all ||
         s->nprocessed == 0 || L->dca_form != AQS_DCA_FORM_SQRT ||
-        !(s->rounding_rel > L->arf_level || s->rfe_max > L->arf_level * s->rfn_max))
+        !(s->rounding_rel > level || s->rfe_max > level * s->rfn_max))
         return;
     /* after a solve (api.c): with nothing queued every joint was computed and
      * the exact solve's refinement follows (refine_exact); with the estimate

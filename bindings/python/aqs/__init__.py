@@ -1030,8 +1030,10 @@ class Linkage:
         only when it lowers the reduced residual); skipped subtrees whose
         coefficients are lossy or whose handle accelerations cancel are
         computed first, so such a solve may compute more joints than its
-        bound needs. level >= 0; 0 turns it off. Square-root DCA form and
-        joint measures only. Any phase."""
+        bound needs. level >= 0; 0 turns it off. On a linkage where a
+        joint's child is more than 1e3 times heavier than its parent the
+        trigger uses level / 1e3. Square-root DCA form and joint measures
+        only. Any phase."""
         f = "aqs_linkage_set_adaptive_refinement"
         self._call(f, _number(level, f, "level"))
 
