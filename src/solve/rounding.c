@@ -51,7 +51,7 @@
 #define RND_TARGET_AVX __attribute__((target("avx")))
 #endif
 
-/* A node's levels in tree.rnd_node (5 per node). */
+/* A node's levels in tree.rnd_node (RND_NODE_LEVELS per node). */
 enum { RND_K, RND_KB, RND_RHO, RND_GAM, RND_SUB, RND_TQ, RND_KP };
 #define RN(t, nd) ((t)->rnd_node + RND_NODE_LEVELS * ((nd) - (t)->nodes))
 
