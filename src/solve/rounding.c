@@ -34,6 +34,7 @@
 #include "rounding.h"
 
 #include <math.h>
+#include <string.h>
 
 #include "dense.h"
 #include "worldbound.h"
@@ -448,20 +449,15 @@ static double bside_entry_error(const aqs_linkage *L, const node *C, const doubl
             if (rigid) {
                 const int32_t m = k % 3;
                 const double tv[3] = {P->R[m], P->R[3 + m], P->R[6 + m]}; /* the handle's axis m */
-                double u[3];
+                double u[3], w[3];
                 if (k < 3) { /* a torque about tv: tv^T I^-1 tv */
-                    u[0] = tv[0];
-                    u[1] = tv[1];
-                    u[2] = tv[2];
+                    memcpy(u, tv, sizeof u);
                 } else { /* a force along tv at the handle: 1/m + (d x tv)^T I^-1 (d x tv) */
-                    u[0] = dd[1] * tv[2] - dd[2] * tv[1];
-                    u[1] = dd[2] * tv[0] - dd[0] * tv[2];
-                    u[2] = dd[0] * tv[1] - dd[1] * tv[0];
+                    vec3_cross(dd, tv, u);
                     phi += im;
                 }
-                phi += u[0] * (Ii[0] * u[0] + Ii[1] * u[1] + Ii[2] * u[2]) +
-                       u[1] * (Ii[3] * u[0] + Ii[4] * u[1] + Ii[5] * u[2]) +
-                       u[2] * (Ii[6] * u[0] + Ii[7] * u[1] + Ii[8] * u[2]);
+                mat3_vec(Ii, u, w);
+                phi += vec3_dot(u, w);
             }
             sum += sqrtn(phi) * fabs(xh[k]);
         }
