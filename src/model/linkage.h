@@ -3,9 +3,12 @@
 #ifndef AQS_LINKAGE_H
 #define AQS_LINKAGE_H
 
-/* model.heavy_child: a joint whose child composite is this many times heavier
- * than its parent composite (docs/math.md 5b) */
+/* model.heavy_ratio, the largest mass of a joint's child composite over its
+ * parent composite's (docs/math.md 5b), above which the articulated-body
+ * solve always refines (AQS_HEAVY_CHILD_ABA) and the adaptive refinement's
+ * level is lowered (AQS_HEAVY_CHILD, docs/math.md 13c) */
 #define AQS_HEAVY_CHILD 1e3
+#define AQS_HEAVY_CHILD_ABA 1e2
 
 #include <stddef.h>
 #include <stdint.h>
@@ -179,10 +182,11 @@ typedef struct {
     int32_t *member_start;  /* ncomp + 2: composite c's members at [start[c], start[c+1]) */
     unsigned char *comp_welded; /* ncomp + 1: holds bodies welded by fixed joints */
     int32_t nquat;          /* joints with a quaternion (spherical, free) */
-    unsigned char heavy_child; /* some joint's child composite is more than AQS_HEAVY_CHILD (1e3)
-                               times heavier than its parent composite (model_build): the
-                               articulated-body solve then always checks its residual
-                               (src/solve/aba.c, docs/math.md 5b) */
+    double heavy_ratio;     /* the largest mass of a joint's child composite over its parent
+                               composite's, the world excluded (model_build; 0 without such a
+                               joint): above AQS_HEAVY_CHILD_ABA (1e2) the articulated-body solve
+                               always refines (src/solve/aba.c, docs/math.md 5b), above
+                               AQS_HEAVY_CHILD (1e3) the adaptive refinement's level is lower */
     double length;          /* the linkage's length scale, m (model_build: the geometric mean
                                of the joints' non-zero offsets in their parents' composites,
                                else of the composites' radii of gyration, else 1): weighs

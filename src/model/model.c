@@ -507,10 +507,11 @@ aqs_status model_build(aqs_linkage *L)
     m->length = length_scale(m, cmass);
     /* a heavy child on a light parent (docs/math.md 5b, "Where it loses
      * digits its check does not see") */
-    m->heavy_child = 0;
+    m->heavy_ratio = 0.0;
     for (i = 0; i < m->ne; i++) {
         const int32_t p = m->eff_parent[i], c = m->eff_child[i];
-        if (p < m->ncomp && cmass[13 * c] > AQS_HEAVY_CHILD * cmass[13 * p]) m->heavy_child = 1;
+        if (p < m->ncomp && cmass[13 * c] > m->heavy_ratio * cmass[13 * p])
+            m->heavy_ratio = cmass[13 * c] / cmass[13 * p]; /* masses are positive (checked at finalize) */
     }
     /* Members of each composite, parents first (for the fixed joints' forces). */
     m->members = lk_calloc(L, (size_t)nb + 1, sizeof(int32_t));

@@ -10,17 +10,26 @@
  * them on the same models: up to 4e-9 against 2e-16). The forward pass
  * measures the bodies' balance of forces (aba.c, forward); above
  * ABA_REFINE_LEVEL u this file refines the answer:
- *   r   = Q - S^T f,  f_c = I_c a_c - f_ext,c + sum_children X^T f_child
- *         (inverse dynamics inward from the solve's accelerations a_c)
+ *   r   = Q - S^T f,  f_c = I_c a_c - f_ext,c + sum_children X^T f_child,
+ *         a_c = X a_p + S qdd (inverse dynamics from the joint
+ *         accelerations, in double-double, rounded once: src/base/ddouble.h)
  *   dq  = ABA^-1(r): the articulated-body solve with r as the only load (no
  *         gravity, no external force) by the factors the solve kept (U,
  *         D^-1, the poses): bias forces backward, accelerations forward
- *   qdd += dq, a_c += da_c
- * A correction is kept when it lowers the residual; at most L->refine_max
- * of them (aqs_linkage_set_exact_refinement, which also switches the
- * balance off at 0). A solve that kept one takes the inverse dynamics'
- * forces f_c of its final accelerations (its own, f = IA a + pA, are what
- * the balance found unbalanced).
+ *   qdd += dq
+ * A first correction at the rounding level ends it, the answer kept; else a
+ * correction is kept when the next one is at most half as large (the
+ * iteration contracts: on a heavy body held by light links the residual
+ * cannot measure the error, a rounding of the heavy joints' accelerations
+ * leaving a larger one than the light links' whole error); at most
+ * L->refine_max of them (aqs_linkage_set_exact_refinement, which also
+ * switches the balance off at 0). The forces: the bodies' accelerations are
+ * refined on their own against the same residual (they carry digits below
+ * the joint accelerations' rounding), and the inverse dynamics' forces of
+ * them are taken, or where the solve's articulated inertias are kept, its
+ * own forces moved by them where that agrees (refined_forces). A solve
+ * whose first correction is at the rounding level refines its forces only
+ * when the balance (not a heavy child alone) started it.
  * Scratch: the nodes' pA (zero between solves, left zero) and, once a solve
  * refines, the arrays of struct aba_refine (LK_MEM_EXACT, kept). */
 #include "abarefine.h"
@@ -28,27 +37,38 @@
 #include <math.h>
 #include <string.h>
 
+#include "ddouble.h"
 #include "dense.h"
 #include "kintree.h"
 #include "rounding.h"
 
 struct aba_refine {
+    ddouble *acc; /* 6 ne: the bodies' accelerations (minus g) in double-double */
+    ddouble *f;   /* 6 ne: the joint forces in double-double (children's added first) */
     double *r;    /* nv: the residual */
     double *dq;   /* nv: a correction (the loads pass's u first) */
     double *q0;   /* nv: the accelerations before the correction */
-    double *da;   /* 6 ne: the correction's accelerations */
-    double *a0;   /* 6 ne: the nodes' accelerations before it */
+    double *q1;   /* nv: the solve's own accelerations */
+    double *a1;   /* 6 ne: the solve's own bodies' accelerations */
+    ddouble *acc0; /* 6 ne: R->acc before a correction of the forces' refinement */
+    double *da;   /* 6 ne: the correction's accelerations (its scratch); the forces f_IA */
+    double *e;    /* 12 ne: the inverse dynamics' sensitivity, accelerations and forces */
 };
 
 void aba_refine_free(aqs_linkage *L)
 {
     struct aba_refine *R = L->abarf;
     if (!R) return;
+    lk_free(L, R->acc);
+    lk_free(L, R->f);
     lk_free(L, R->r);
     lk_free(L, R->dq);
     lk_free(L, R->q0);
+    lk_free(L, R->q1);
+    lk_free(L, R->acc0);
+    lk_free(L, R->a1);
     lk_free(L, R->da);
-    lk_free(L, R->a0);
+    lk_free(L, R->e);
     lk_free(L, R);
     L->abarf = NULL;
 }
@@ -61,60 +81,161 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
     R = lk_calloc_in(L, LK_MEM_EXACT, 1, sizeof *R);
     if (!R) return NULL;
     L->abarf = R;
+    R->acc = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(ddouble));
+    R->f = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(ddouble));
     R->r = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->dq = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->q0 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
+    R->q1 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
+    R->acc0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(ddouble));
+    R->a1 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->da = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
-    R->a0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
-    if (!R->r || !R->dq || !R->q0 || !R->da || !R->a0) {
+    R->e = lk_calloc_in(L, LK_MEM_EXACT, 2 * ne6, sizeof(double));
+    if (!R->acc || !R->f || !R->r || !R->dq || !R->q0 || !R->q1 || !R->acc0 || !R->a1 || !R->da || !R->e) {
         aba_refine_free(L);
         return NULL;
     }
     return R;
 }
 
-/* The residual of the nodes' accelerations (L->qdd their joint parts):
- * into r when r is not NULL, the forces into L->cforce when forces is set.
- * Returns max |r| over the larger of the largest joint force and the sum
- * of the bodies' terms |I_c a_c| + m_c |g| (torques weighed by 1/l as in
- * rounding.c; 0 when both are 0; NaN when a value is not finite). pA is
- * the inward pass's accumulator: zero before (the forward pass leaves it
- * so) and after. */
+/* Double-double forms of aba.c's transforms: o = X v (v a motion in the
+ * parent's frame), g += X^T f, o = I v (I packed). */
+static void dd_motion_from_parent(const pose *P, const ddouble *v, ddouble *o)
+{
+    const double *R = P->R, *p = P->p;
+    ddouble t[3];
+    int i;
+    t[0] = dd_add_mul(dd_add_mul(v[3], -p[1], v[2]), p[2], v[1]);
+    t[1] = dd_add_mul(dd_add_mul(v[4], -p[2], v[0]), p[0], v[2]);
+    t[2] = dd_add_mul(dd_add_mul(v[5], -p[0], v[1]), p[1], v[0]);
+    for (i = 0; i < 3; i++) {
+        o[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[i], v[0]), R[3 + i], v[1]), R[6 + i], v[2]);
+        o[3 + i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[i], t[0]), R[3 + i], t[1]), R[6 + i], t[2]);
+    }
+}
+
+static void dd_force_to_parent_add(const pose *P, const ddouble *f, ddouble *g)
+{
+    const double *R = P->R, *p = P->p;
+    ddouble l[3], n[3];
+    int i;
+    for (i = 0; i < 3; i++) {
+        l[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[3 * i], f[3]), R[3 * i + 1], f[4]), R[3 * i + 2], f[5]);
+        n[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[3 * i], f[0]), R[3 * i + 1], f[1]), R[3 * i + 2], f[2]);
+    }
+    g[0] = dd_add(g[0], dd_add_mul(dd_add_mul(n[0], p[1], l[2]), -p[2], l[1]));
+    g[1] = dd_add(g[1], dd_add_mul(dd_add_mul(n[1], p[2], l[0]), -p[0], l[2]));
+    g[2] = dd_add(g[2], dd_add_mul(dd_add_mul(n[2], p[0], l[1]), -p[1], l[0]));
+    for (i = 0; i < 3; i++) g[3 + i] = dd_add(g[3 + i], l[i]);
+}
+
+static void dd_inertia_mul(const double *I, const ddouble *v, ddouble *o)
+{
+    double F[36];
+    int i, j;
+    kin_unpack_inertia(I, F);
+    for (i = 0; i < 6; i++) {
+        ddouble s = dd_from(0.0);
+        for (j = 0; j < 6; j++) s = dd_add_mul(s, F[6 * i + j], v[j]);
+        o[i] = s;
+    }
+}
+
+/* The bodies' accelerations (minus g) from L->qdd into R->acc in
+ * double-double: a_c = X a_p + S qdd outward from a_0 = -g. */
+static void dd_accelerations(aqs_linkage *L)
+{
+    const model *m = &L->m;
+    const aba_state *a = &L->aba;
+    struct aba_refine *R = L->abarf;
+    double S[36];
+    ddouble g[6];
+    int32_t k, i, j;
+    for (i = 0; i < 3; i++) {
+        g[i] = dd_from(0.0);
+        g[3 + i] = dd_from(-L->gravity[i]);
+    }
+    for (k = 0; k < m->ne; k++) {
+        const aba_joint *jt = &a->joint[k];
+        const double *q = L->qdd + jt->voff;
+        ddouble *ac = R->acc + 6 * (size_t)k;
+        dd_motion_from_parent(&a->node[k].X, jt->parent < 0 ? g : R->acc + 6 * (size_t)jt->parent, ac);
+        if (jt->type == AQS_JOINT_REVOLUTE) {
+            ac[2] = dd_add(ac[2], dd_from(q[0])); /* S = e_z, aligned */
+        } else if (jt->type == AQS_JOINT_PRISMATIC) {
+            ac[5] = dd_add(ac[5], dd_from(q[0]));
+        } else if (jt->type != AQS_JOINT_FIXED) {
+            const int d = joint_nv(jt->type);
+            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < d; j++) ac[i] = dd_add_prod(ac[i], S[i * d + j], q[j]);
+        }
+    }
+}
+
+/* The residual of the bodies' accelerations in R->acc (double-double; from
+ * the joint accelerations by dd_accelerations, or refined on their own by
+ * refine_accelerations): into r when r is not NULL; with forces, the joint
+ * forces into L->cforce (rounded). Inverse dynamics in double-double:
+ * f_c = I_c a_c - f_ext,c + sum_children X^T f_child inward, r = Q - S^T f_c
+ * rounded once (docs/math.md 5b, "The residual in double-double"): in
+ * double, a heavy body's I a and its weight cancel to u times their size,
+ * which light links' joints would see as their whole residual. Returns
+ * max |r| over the larger of the largest joint force and the sum of the
+ * bodies' terms |I_c a_c| + m_c |g| (torques weighed by 1/l as in
+ * rounding.c; 0 when both are 0; NaN when a value is not finite). */
 static double residual(aqs_linkage *L, double *r, int forces)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
+    struct aba_refine *R = L->abarf;
     const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
-    double rmax = 0.0, smax = 0.0, tsum = 0.0, f[6];
+    double rmax = 0.0, smax = 0.0, tsum = 0.0, S[36];
     int32_t k, i, j, bad = 0;
+    memset(R->f, 0, 6 * (size_t)m->ne * sizeof(ddouble));
     for (i = 0; i < m->nloaded_comps; i++) {
         const int32_t c = m->loaded_comps[i];
-        double *pA = a->node[a->pos_of_comp[c]].pA;
-        for (j = 0; j < 6; j++) pA[j] -= m->comp_force[6 * c + j];
+        ddouble *f = R->f + 6 * (size_t)a->pos_of_comp[c];
+        for (j = 0; j < 6; j++) f[j] = dd_from(-m->comp_force[6 * c + j]);
     }
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
-        aba_node *nd = &a->node[k];
-        kin_inertia_mul(jt->I, nd->v.s.acc, f);
+        ddouble *f = R->f + 6 * (size_t)k, t[6];
+        double e = 0.0, fl[6];
+        dd_inertia_mul(jt->I, R->acc + 6 * (size_t)k, t);
         /* the bodies' terms, their norms summed: I (a - g) and the weight m |g| (in
          * a free fall both are 0 and m |g|, and so are the joint forces) */
-        tsum += (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fabs(f[3]) + fabs(f[4]) + fabs(f[5]) +
-                jt->I[KIN_PC] * gn;
-        for (i = 0; i < 6; i++) f[i] += nd->pA[i];
-        {
-            const double e = kin_joint_residual(L, jt, f, il, r ? r + jt->voff : NULL); /* torques by 1/l */
-            rmax = fmax(rmax, e);
-            bad |= !(e == e); /* fmax drops a NaN */
+        tsum += (fabs(t[0].hi) + fabs(t[1].hi) + fabs(t[2].hi)) * il + fabs(t[3].hi) + fabs(t[4].hi) +
+                fabs(t[5].hi) + jt->I[KIN_PC] * gn;
+        for (i = 0; i < 6; i++) {
+            f[i] = dd_add(f[i], t[i]);
+            fl[i] = dd_to_double(f[i]);
         }
-        smax = fmax(smax, (fabs(f[0]) + fabs(f[1]) + fabs(f[2])) * il + fabs(f[3]) + fabs(f[4]) + fabs(f[5]));
-        if (forces) memcpy(L->cforce + 6 * (size_t)jt->joint, f, sizeof f);
-        if (jt->parent >= 0) {
-            double t[6], *fp = a->node[jt->parent].pA;
-            spatial_xform_force_back(&nd->X, f, t);
-            for (i = 0; i < 6; i++) fp[i] += t[i];
+        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
+            const int rev = jt->type == AQS_JOINT_REVOLUTE;
+            const double v = dd_to_double(dd_add(dd_from(L->tau[jt->voff]), dd_neg(f[rev ? 2 : 5])));
+            if (r) r[jt->voff] = v;
+            e = fabs(v) * (rev ? il : 1.0);
+        } else if (jt->type != AQS_JOINT_FIXED) {
+            const int d = joint_nv(jt->type);
+            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
+            for (j = 0; j < d; j++) {
+                ddouble s = dd_from(L->tau[jt->voff + j]);
+                double v;
+                for (i = 0; i < 6; i++) s = dd_add_mul(s, -S[i * d + j], f[i]);
+                v = dd_to_double(s);
+                if (r) r[jt->voff + j] = v;
+                v = fabs(v);
+                if (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0) v *= il; /* a torque */
+                if (!(v <= e)) e = v; /* NaN too */
+            }
         }
-        memset(nd->pA, 0, sizeof nd->pA);
+        rmax = fmax(rmax, e);
+        bad |= !(e == e); /* fmax drops a NaN */
+        smax = fmax(smax, (fabs(fl[0]) + fabs(fl[1]) + fabs(fl[2])) * il + fabs(fl[3]) + fabs(fl[4]) + fabs(fl[5]));
+        if (forces) memcpy(L->cforce + 6 * (size_t)jt->joint, fl, sizeof fl);
+        if (jt->parent >= 0) dd_force_to_parent_add(&a->node[k].X, f, R->f + 6 * (size_t)jt->parent);
     }
     smax = fmax(smax, tsum);
     if (bad || !isfinite(smax)) return NAN;
@@ -191,38 +312,194 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
     }
 }
 
-int32_t aba_refine(aqs_linkage *L, double balance)
+/* max |v_i| over nv entries (NaN when one is NaN). */
+static double max_abs(const double *v, int32_t n)
+{
+    double e = 0.0;
+    int32_t i;
+    for (i = 0; i < n; i++)
+        if (!(fabs(v[i]) <= e)) e = fabs(v[i]);
+    return e;
+}
+
+
+/* The refined solve's forces where the solve's articulated inertias are
+ * kept (docs/math.md 5b, "The forces of a refined solve"). Two candidates:
+ *   f_ID  the inverse dynamics' forces of the refined accelerations (the
+ *         residual's, in double-double): exact for those accelerations, but
+ *         a rounding of u |qdd|_max in each joint moves the joint force at k
+ *         by up to E_k, the same inverse dynamics in absolute values (a
+ *         heavy subtree far from the joint: its weight times the lever arm
+ *         times u, 1e-10 of the largest force on a 1,000-link chain of
+ *         masses alternating by 1e6);
+ *   f_IA  the solve's own forces f = IA a + pA moved by IA times the change
+ *         of the body's acceleration: insensitive to the subtree's
+ *         accelerations, but carrying the articulated inertias' rounding
+ *         where the balance did not see it (4.7e-10 on a floating tree of
+ *         mixed joints, masses 1e-3 .. 1e3).
+ * Where the refinement moved the accelerations by at most ABA_FORCE_KEEP u
+ * of the largest (the solve's own were right to rounding, and so are its
+ * forces), each joint takes f_IA where every component is within
+ * ABA_FORCE_AGREE E_k of f_ID; elsewhere, and after a larger move, f_ID. A
+ * free joint's force stays Q. The nodes' accelerations take the refined
+ * values. moved: the largest change of an acceleration over the largest
+ * acceleration. */
+static void refined_forces(aqs_linkage *L, double moved)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
-    struct aba_refine *R;
-    const size_t nvb = (size_t)L->nv * sizeof(double);
+    struct aba_refine *R = L->abarf;
+    double *fia = R->da, dqmax = 0.0, S[36];
+    int32_t k, i, j;
+    for (k = 0; k < m->ne; k++) { /* f_IA (L->cforce holds the solve's forces) */
+        const aba_joint *jt = &a->joint[k];
+        const aba_node *nd = &a->node[k];
+        const double *f = L->cforce + 6 * (size_t)jt->joint;
+        double da[6];
+        for (i = 0; i < 6; i++) da[i] = nd->v.s.acc[i] - R->a1[6 * (size_t)k + i];
+        kin_inertia_mul(nd->IA, da, fia + 6 * (size_t)k);
+        for (i = 0; i < 6; i++) fia[6 * (size_t)k + i] += f[i];
+    }
+    (void)residual(L, NULL, 1); /* f_ID into L->cforce */
+    for (i = 0; i < L->nv; i++) dqmax = fmax(dqmax, fabs(L->qdd[i]));
+    dqmax *= RND_U;
+    for (k = 0; k < m->ne; k++) { /* E: the accelerations' part, outward */
+        const aba_joint *jt = &a->joint[k];
+        const double *Rm = a->node[k].X.R, *p = a->node[k].X.p;
+        const double *v = jt->parent < 0 ? NULL : R->e + 12 * (size_t)jt->parent;
+        double *o = R->e + 12 * (size_t)k;
+        memset(o, 0, 12 * sizeof(double));
+        if (v) {
+            const double t0 = v[3] + fabs(p[1]) * v[2] + fabs(p[2]) * v[1];
+            const double t1 = v[4] + fabs(p[2]) * v[0] + fabs(p[0]) * v[2];
+            const double t2 = v[5] + fabs(p[0]) * v[1] + fabs(p[1]) * v[0];
+            for (i = 0; i < 3; i++) {
+                o[i] = fabs(Rm[i]) * v[0] + fabs(Rm[3 + i]) * v[1] + fabs(Rm[6 + i]) * v[2];
+                o[3 + i] = fabs(Rm[i]) * t0 + fabs(Rm[3 + i]) * t1 + fabs(Rm[6 + i]) * t2;
+            }
+        }
+        if (jt->type == AQS_JOINT_REVOLUTE) {
+            o[2] += dqmax;
+        } else if (jt->type == AQS_JOINT_PRISMATIC) {
+            o[5] += dqmax;
+        } else if (jt->type != AQS_JOINT_FIXED) {
+            const int d = joint_nv(jt->type);
+            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
+            for (i = 0; i < 6; i++)
+                for (j = 0; j < d; j++) o[i] += fabs(S[i * d + j]) * dqmax;
+        }
+    }
+    for (k = m->ne - 1; k >= 0; k--) { /* E: the forces' part, inward; then the choice */
+        const aba_joint *jt = &a->joint[k];
+        const double *v = R->e + 12 * (size_t)k;
+        double *e = R->e + 12 * (size_t)k + 6, *f = L->cforce + 6 * (size_t)jt->joint, F[36];
+        int agree = jt->type != AQS_JOINT_FREE && moved <= ABA_FORCE_KEEP * RND_U;
+        kin_unpack_inertia(jt->I, F);
+        for (i = 0; i < 6; i++) { /* e holds the children's part */
+            double s = e[i];
+            for (j = 0; j < 6; j++) s += fabs(F[6 * i + j]) * v[j];
+            e[i] = s;
+            agree &= fabs(f[i] - fia[6 * (size_t)k + i]) <= ABA_FORCE_AGREE * s;
+        }
+        if (agree) memcpy(f, fia + 6 * (size_t)k, 6 * sizeof(double));
+        if (jt->parent >= 0) {
+            const double *Rm = a->node[k].X.R, *p = a->node[k].X.p;
+            double *g = R->e + 12 * (size_t)jt->parent + 6, l[3], n[3];
+            for (i = 0; i < 3; i++) {
+                l[i] = fabs(Rm[3 * i]) * e[3] + fabs(Rm[3 * i + 1]) * e[4] + fabs(Rm[3 * i + 2]) * e[5];
+                n[i] = fabs(Rm[3 * i]) * e[0] + fabs(Rm[3 * i + 1]) * e[1] + fabs(Rm[3 * i + 2]) * e[2];
+            }
+            g[0] += n[0] + fabs(p[1]) * l[2] + fabs(p[2]) * l[1];
+            g[1] += n[1] + fabs(p[2]) * l[0] + fabs(p[0]) * l[2];
+            g[2] += n[2] + fabs(p[0]) * l[1] + fabs(p[1]) * l[0];
+            for (i = 0; i < 3; i++) g[3 + i] += l[i];
+        }
+    }
+}
+
+/* The forces' refinement: the bodies' accelerations, in double-double from
+ * the refined joint accelerations (R->acc), refined on their own against the
+ * residual of the inverse dynamics' forces, a correction kept while it lowers
+ * the residual (at most L->refine_max). The joint accelerations are left as
+ * they are: the bodies' accelerations carry digits below their rounding,
+ * and the inverse dynamics' forces of a heavy subtree are that sensitive to
+ * them (docs/math.md 5b, "The forces of a refined solve"). */
+static void refine_accelerations(aqs_linkage *L, struct aba_refine *R)
+{
+    const size_t n6 = 6 * (size_t)L->m.ne;
     double res, next;
-    int32_t kept = 0, it, k, i;
-    if (L->refine_max <= 0 || !(balance > ABA_REFINE_LEVEL * RND_U) || !isfinite(balance)) return 0;
-    R = refine_arrays(L);
-    if (!R) return 0; /* out of memory: the unrefined answer stands */
+    size_t i;
+    int32_t it;
+    dd_accelerations(L);
     res = residual(L, R->r, 0);
     for (it = 0; it < L->refine_max; it++) {
         correction(L, R->r, R->dq, R->da);
-        memcpy(R->q0, L->qdd, nvb);
-        for (k = 0; k < m->ne; k++) {
-            double *ac = a->node[k].v.s.acc;
-            memcpy(R->a0 + 6 * (size_t)k, ac, 6 * sizeof(double));
-            for (i = 0; i < 6; i++) ac[i] += R->da[6 * (size_t)k + i];
-        }
-        for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
+        memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
+        for (i = 0; i < n6; i++) R->acc[i] = dd_add(R->acc[i], dd_from(R->da[i]));
         next = residual(L, R->r, 0);
-        if (!(next < res)) { /* not better: the previous answer back, bit for bit */
+        if (!(next < res)) {
+            memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
+            break;
+        }
+        res = next;
+    }
+    for (i = 0; i < n6; i++) L->aba.node[i / 6].v.s.acc[i % 6] = dd_to_double(R->acc[i]);
+}
+
+int32_t aba_refine(aqs_linkage *L, double balance, int ia_kept)
+{
+    struct aba_refine *R;
+    const size_t nvb = (size_t)L->nv * sizeof(double);
+    double step, next;
+    int32_t kept = 0, it, i, k;
+    if (L->refine_max <= 0 || !(balance > ABA_REFINE_LEVEL * RND_U) || !isfinite(balance)) return 0;
+    R = refine_arrays(L);
+    if (!R) return 0; /* out of memory: the unrefined answer stands */
+    memcpy(R->q1, L->qdd, nvb);
+    dd_accelerations(L);
+    (void)residual(L, R->r, 0);
+    correction(L, R->r, R->dq, R->da);
+    step = max_abs(R->dq, L->nv);
+    /* a first correction at the rounding level: the solve had the digits
+     * the problem has, and keeps its answer; its forces too unless the
+     * balance (not the heavy child alone) started the refinement */
+    if (step <= ABA_REFINE_SMALL * RND_U * max_abs(L->qdd, L->nv)) {
+        if (!ia_kept) {
+            refine_accelerations(L, R);
+            (void)residual(L, NULL, 1);
+        }
+        return 0;
+    }
+    for (it = 0; it < L->refine_max && isfinite(step); it++) {
+        memcpy(R->q0, L->qdd, nvb);
+        for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
+        dd_accelerations(L);
+        (void)residual(L, R->r, 0);
+        correction(L, R->r, R->dq, R->da);
+        next = max_abs(R->dq, L->nv);
+        if (!(next <= ABA_REFINE_RATE * step)) { /* no contraction: the previous answer back, bit for bit */
             memcpy(L->qdd, R->q0, nvb);
-            for (k = 0; k < m->ne; k++) memcpy(a->node[k].v.s.acc, R->a0 + 6 * (size_t)k, 6 * sizeof(double));
             break;
         }
         kept++;
-        res = next;
+        step = next;
     }
-    /* The forces: the inverse dynamics' of the refined accelerations (the
-     * solve's own, f = IA a + pA, are what the balance found unbalanced) */
-    if (kept) (void)residual(L, NULL, 1);
+    if (kept) {
+        double moved = 0.0, qm = 0.0;
+        for (i = 0; i < L->nv; i++) {
+            moved = fmax(moved, fabs(L->qdd[i] - R->q1[i]));
+            qm = fmax(qm, fabs(L->qdd[i]));
+        }
+        if (ia_kept) /* the solve's own bodies' accelerations, for f_IA */
+            for (k = 0; k < L->m.ne; k++) memcpy(R->a1 + 6 * (size_t)k, L->aba.node[k].v.s.acc, 6 * sizeof(double));
+        refine_accelerations(L, R);
+        if (ia_kept) {
+            refined_forces(L, qm > 0.0 ? moved / qm : 0.0);
+        } else {
+            /* the inverse dynamics' forces (the solve's own, f = IA a + pA,
+             * are what the balance found unbalanced) */
+            (void)residual(L, NULL, 1);
+        }
+    }
     return kept;
 }

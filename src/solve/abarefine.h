@@ -22,11 +22,30 @@
  * solve refines (docs/math.md §5b, "The joints' own equations"). */
 #define ABA_PROJ_SCALE 64.0
 
+/* A correction is kept when the next one, formed from the residual it
+ * leaves, is at most ABA_REFINE_RATE times as large (the iteration
+ * contracts). A first correction of at most ABA_REFINE_SMALL u of the
+ * largest acceleration leaves the solve's answer as it is (docs/math.md §5b, "The
+ * residual in double-double"). */
+#define ABA_REFINE_RATE 0.5
+#define ABA_REFINE_SMALL 4.0
+/* A refined solve keeps a joint's force moved from its own by its
+ * articulated inertia where that is within this multiple of the inverse
+ * dynamics' sensitivity of the inverse dynamics' force (abarefine.c,
+ * refined_forces). */
+#define ABA_FORCE_AGREE 8.0
+/* ... and only where the refinement moved no acceleration by more than this
+ * many u of the largest. */
+#define ABA_FORCE_KEEP 256.0
+
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): measure the residual and refine where it exceeds the
  * level, at most L->refine_max corrections. Returns the corrections kept
- * (their forces then in L->cforce). Out of memory: 0, the answer as it was. */
-int32_t aba_refine(aqs_linkage *L, double balance);
+ * (their forces then in L->cforce). With ia_kept (the nodes' IA still the
+ * solve's articulated inertias) the refined forces are the solve's own
+ * moved by IA times the change of each body's acceleration, else those of
+ * the inverse dynamics. Out of memory: 0, the answer as it was. */
+int32_t aba_refine(aqs_linkage *L, double balance, int ia_kept);
 /* Release the refinement's arrays (at destroy and when the model changes). */
 void aba_refine_free(aqs_linkage *L);
 

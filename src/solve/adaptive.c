@@ -439,7 +439,7 @@ static void refine_run(aqs_linkage *L, heap *h, double eps, int from_solve)
      * computed joints of planar chains with light links between heavy ones
      * were up to 5e3x the ABA's error with estimates of 2e-11 .. 5e-11;
      * docs/math.md §13c) */
-    const double level = L->arf_level * (L->m.heavy_child ? 1.0 / AQS_HEAVY_CHILD : 1.0);
+    const double level = L->arf_level * (L->m.heavy_ratio > AQS_HEAVY_CHILD ? 1.0 / AQS_HEAVY_CHILD : 1.0);
     double pre_r, pre_rel;
     int32_t opened;
     int pre_cert;

@@ -136,6 +136,7 @@ struct KnownBad {
     bool dca;       // exact DCA
     bool adaptive;  // adaptive solves and their bound
     const char *why;
+    bool scaled_only = false;  // only with --length-unit other than 1
 };
 // The square-root form (the default; docs/math.md section 4a), measured 2026-12-02. The
 // chains, the point masses (welded, and lone since the rigid join in inertia form), the
@@ -144,6 +145,14 @@ struct KnownBad {
 // chains to 1e6, near-equilibrium trees and light distal chains (and since 2026-12-04 the
 // adaptive solves' computed joints are refined above an estimate of 1e-10, §13c). These do
 // not reach 10x the ABA yet (and the adaptive "true <= bound + 10x ABA" fails with them):
+// Known bad for one check only: the exact DCA's joint forces within 10x of the refined ABA's.
+// In millimetres (--length-unit 1000) only: the exact DCA's joint forces 1.9e-13 of the largest
+// (1.5e-16 in metres; unchanged since before 2026-12-05), more than 10x the refined ABA's since
+// its refinement's residual is in double-double (7.0e-17; 4.5e-13 before: docs/math.md 5b, "The
+// residual in double-double"). Its accelerations, and its forces against the textbook ABA, pass.
+const KnownBad kKnownBadDcaForceVsRefined[] = {
+    {"altmass/planar/heavytip2/r=1e+06/n=12/seed=3", true, false, "mm: DCA forces 1.9e-13 vs the refined ABA 7e-17", true},
+};
 const std::vector<KnownBad> kKnownBad = {
     // Planar chains with heavy and light links in given patterns (2026-12-05): some adaptive
     // solves' computed joints were 1e2 .. 5e3x the ABA's error (certified, within their bound)
@@ -801,9 +810,13 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
             // heavy links held by three or more light ones: the ABA's light mode (docs/math.md
             // 5b, "Where it loses digits its check does not see": 3.8e-9 .. 1.1e-7 until
             // 2026-12-05, when its refinement's trigger did not see it)
-            {"heavytip1", "HlllH"}, {"heavytip2", "lHlllHHlllHl"}};
+            {"heavytip1", "HlllH"}, {"heavytip2", "lHlllHHlllHl"},
+            // four and eight: the ABA's refinement, its residual in double, stopped at 3.7e-11 (1e6)
+            // and 2.9e-10 (1e9) until 2026-12-05, later (docs/math.md 5b, "The residual in
+            // double-double")
+            {"heavytip3", "HllllH"}, {"heavytip4", "HllllllllH"}};
         for (const auto &pt : pats)
-            for (double ratio : {1e3, 1e6, 1e9})
+            for (double ratio : {1e2, 1e3, 1e6, 1e9})
                 for (uint64_t seed : {1ull, 2ull, 3ull})
                     add("altmass", "planar/" + pt.first + "/r=" + fmt("%.0e", ratio) + "/n=" +
                         std::to_string(pt.second.size()) + "/seed=" + std::to_string(seed), (int)pt.second.size(),
@@ -1070,8 +1083,15 @@ const KnownBad *known_bad(const std::string &name) {
         return nullptr;
     }
     for (const KnownBad &k : kKnownBad)
-        if (name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return &k;
+        if ((!k.scaled_only || g_unit != 1.0) && name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return &k;
     return nullptr;
+}
+
+bool known_bad_dca_force_vs_refined(const std::string &name) {
+    if (g_dca_form == AQS_DCA_FORM_PHI) return false;
+    for (const KnownBad &k : kKnownBadDcaForceVsRefined)
+        if ((!k.scaled_only || g_unit != 1.0) && name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return true;
+    return false;
 }
 
 std::string jstr(const std::string &s) {
@@ -1412,6 +1432,17 @@ int main(int argc, char **argv) {
         // links under gravity; since the forces of the refined bodies' accelerations, 2026-12-04,
         // 2.5e-16 there, the worst 5.4e-10 on alternating masses 1e6 at 1,000 links).
         const bool check_forces = g_dca_form != AQS_DCA_FORM_PHI;
+        // The other way round (2026-12-05): the library's ABA within 10x of the exact DCA (square-root
+        // form), floor 1e-15. Heavy links held by light ones were up to 4,700x before the ABA's
+        // refinement took its residual in double-double and started above a mass ratio of 1e2 (was
+        // 1e3; docs/math.md 5b, "The residual in double-double"); now at most 3.7x.
+        // Asserted on the heavy/light chains with a mass ratio above 1e2 (the ABA's refinement starts
+        // there); elsewhere the ABA's own rounding (e.g. 2e-14 on a benign random tree in
+        // millimetres) may exceed 10x the DCA's.
+        const bool heavy_light = sp.family == "altmass" && sp.name.find("r=1e+02") == std::string::npos;
+        if (g_dca_form != AQS_DCA_FORM_PHI && st == AQS_OK && heavy_light)
+            verdict(str == AQS_OK && abr.rel2 <= kDcaVsAba * std::max(dca.rel2, kErrFloor), false,
+                    sp.name + " refined ABA rel2 " + fmt("%.2e", abr.rel2) + " vs the exact DCA " + fmt("%.2e", dca.rel2));
         if (check_forces)
             verdict(st == AQS_OK && dca.force <= kDcaVsAba * force_floor, kb && kb->dca,
                     sp.name + " DCA constraint forces " + fmt("%.2e", dca.force) + " vs ABA " + fmt("%.2e", aba.force));
@@ -1421,7 +1452,8 @@ int main(int argc, char **argv) {
         // exact refinement took the forces of the refined bodies' accelerations where they
         // do not balance: src/solve/refine.c, state_forces)
         if (check_forces && str == AQS_OK)
-            verdict(st == AQS_OK && dca.force <= kDcaVsAba * std::max(abr.force, kErrFloor), kb && kb->dca,
+            verdict(st == AQS_OK && dca.force <= kDcaVsAba * std::max(abr.force, kErrFloor),
+                    (kb && kb->dca) || known_bad_dca_force_vs_refined(sp.name),
                     sp.name + " DCA constraint forces " + fmt("%.2e", dca.force) + " vs the refined ABA " +
                         fmt("%.2e", abr.force));
         if (json)
