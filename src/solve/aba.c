@@ -36,7 +36,6 @@
 #include "dense.h"
 #include "kintree.h"
 #include "invariant.h"
-#include "rounding.h"
 #include "update.h"
 
 #ifdef __GNUC__
@@ -509,7 +508,7 @@ static void forward_general(aqs_linkage *L, const aba_joint *jt, aba_node *nd, d
  * ABA_PROJ_SCALE max_e |f_e| (torques weighed by 1/l), unless the joint
  * forces are below 2^-20 of the terms; the larger of the two measures.
  * Without check, 0 (pA zeroed as well). */
-static double forward(aqs_linkage *L, int check, int keep_ia)
+static double forward(aqs_linkage *L, int check)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
@@ -593,7 +592,7 @@ static double forward(aqs_linkage *L, int check, int keep_ia)
         } else {
             memset(b, 0, sizeof nd->pA); /* ready for the next backward pass */
         }
-        if (!keep_ia) memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
+        memcpy(nd->IA, jt->I, sizeof nd->IA); /* ready for the next backward pass */
     }
     if (!check) return 0.0;
     if (bad || emax != emax) return NAN;
@@ -661,22 +660,12 @@ aqs_status aba_solve(aqs_linkage *L)
         return st;
     }
     {
+        double bal = forward(L, L->refine_max > 0);
         /* a heavy child on a light parent: the balance, formed with the
          * solve's own forces, can miss the light links' mode (docs/math.md
          * 5b, "Where it loses digits its check does not see"): such a solve
-         * is always refined, and keeps its articulated inertias for the
-         * refined forces, which it takes where the balance holds (else the
-         * inverse dynamics') */
-        const int heavy = L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA && L->refine_max > 0;
-        double bal = forward(L, L->refine_max > 0, heavy);
-        const int balanced = bal <= ABA_REFINE_LEVEL * RND_U;
-        if (heavy && bal == bal) bal = fmax(bal, 1.0);
-        L->s.refined = aba_refine(L, bal, heavy && balanced);
-        if (heavy) {
-            int32_t k;
-            for (k = 0; k < L->m.ne; k++) /* ready for the next backward pass */
-                memcpy(L->aba.node[k].IA, L->aba.joint[k].I, sizeof L->aba.node[k].IA);
-        }
+         * is always refined */
+        L->s.refined = aba_refine(L, bal, L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA);
     }
     L->aba.x_valid = 1;
     aba_welded_forces(L);

@@ -48,11 +48,10 @@ struct aba_refine {
     double *r;    /* nv: the residual */
     double *dq;   /* nv: a correction (the loads pass's u first) */
     double *q0;   /* nv: the accelerations before the correction */
-    double *q1;   /* nv: the solve's own accelerations */
-    double *a1;   /* 6 ne: the solve's own bodies' accelerations */
     ddouble *acc0; /* 6 ne: R->acc before a correction of the forces' refinement */
-    double *da;   /* 6 ne: the correction's accelerations (its scratch); the forces f_IA */
-    double *e;    /* 12 ne: the inverse dynamics' sensitivity, accelerations and forces */
+    double *fcur; /* 6 ne: the joint forces of R->acc's state, ABA order */
+    double *ftry; /* 6 ne: those of a correction tried */
+    double *da;   /* 6 ne: the correction's accelerations */
 };
 
 void aba_refine_free(aqs_linkage *L)
@@ -64,11 +63,10 @@ void aba_refine_free(aqs_linkage *L)
     lk_free(L, R->r);
     lk_free(L, R->dq);
     lk_free(L, R->q0);
-    lk_free(L, R->q1);
     lk_free(L, R->acc0);
-    lk_free(L, R->a1);
+    lk_free(L, R->fcur);
+    lk_free(L, R->ftry);
     lk_free(L, R->da);
-    lk_free(L, R->e);
     lk_free(L, R);
     L->abarf = NULL;
 }
@@ -86,12 +84,11 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
     R->r = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->dq = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->q0 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
-    R->q1 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->acc0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(ddouble));
-    R->a1 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
+    R->fcur = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
+    R->ftry = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->da = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
-    R->e = lk_calloc_in(L, LK_MEM_EXACT, 2 * ne6, sizeof(double));
-    if (!R->acc || !R->f || !R->r || !R->dq || !R->q0 || !R->q1 || !R->acc0 || !R->a1 || !R->da || !R->e) {
+    if (!R->acc || !R->f || !R->r || !R->dq || !R->q0 || !R->acc0 || !R->fcur || !R->ftry || !R->da) {
         aba_refine_free(L);
         return NULL;
     }
@@ -175,8 +172,8 @@ static void dd_accelerations(aqs_linkage *L)
 
 /* The residual of the bodies' accelerations in R->acc (double-double; from
  * the joint accelerations by dd_accelerations, or refined on their own by
- * refine_accelerations): into r when r is not NULL; with forces, the joint
- * forces into L->cforce (rounded). Inverse dynamics in double-double:
+ * refine_forces): into r when r is not NULL; the joint forces (rounded) into
+ * forces when not NULL, 6 a joint in the ABA order. Inverse dynamics in double-double:
  * f_c = I_c a_c - f_ext,c + sum_children X^T f_child inward, r = Q - S^T f_c
  * rounded once (docs/math.md 5b, "The residual in double-double"): in
  * double, a heavy body's I a and its weight cancel to u times their size,
@@ -184,7 +181,7 @@ static void dd_accelerations(aqs_linkage *L)
  * max |r| over the larger of the largest joint force and the sum of the
  * bodies' terms |I_c a_c| + m_c |g| (torques weighed by 1/l as in
  * rounding.c; 0 when both are 0; NaN when a value is not finite). */
-static double residual(aqs_linkage *L, double *r, int forces)
+static double residual(aqs_linkage *L, double *r, double *forces)
 {
     const model *m = &L->m;
     aba_state *a = &L->aba;
@@ -234,7 +231,7 @@ static double residual(aqs_linkage *L, double *r, int forces)
         rmax = fmax(rmax, e);
         bad |= !(e == e); /* fmax drops a NaN */
         smax = fmax(smax, (fabs(fl[0]) + fabs(fl[1]) + fabs(fl[2])) * il + fabs(fl[3]) + fabs(fl[4]) + fabs(fl[5]));
-        if (forces) memcpy(L->cforce + 6 * (size_t)jt->joint, fl, sizeof fl);
+        if (forces) memcpy(forces + 6 * (size_t)k, fl, sizeof fl);
         if (jt->parent >= 0) dd_force_to_parent_add(&a->node[k].X, f, R->f + 6 * (size_t)jt->parent);
     }
     smax = fmax(smax, tsum);
@@ -323,183 +320,80 @@ static double max_abs(const double *v, int32_t n)
 }
 
 
-/* The refined solve's forces where the solve's articulated inertias are
- * kept (docs/math.md 5b, "The forces of a refined solve"). Two candidates:
- *   f_ID  the inverse dynamics' forces of the refined accelerations (the
- *         residual's, in double-double): exact for those accelerations, but
- *         a rounding of u |qdd|_max in each joint moves the joint force at k
- *         by up to E_k, the same inverse dynamics in absolute values (a
- *         heavy subtree far from the joint: its weight times the lever arm
- *         times u, 1e-10 of the largest force on a 1,000-link chain of
- *         masses alternating by 1e6);
- *   f_IA  the solve's own forces f = IA a + pA moved by IA times the change
- *         of the body's acceleration: insensitive to the subtree's
- *         accelerations, but carrying the articulated inertias' rounding
- *         where the balance did not see it (4.7e-10 on a floating tree of
- *         mixed joints, masses 1e-3 .. 1e3).
- * Where the refinement moved the accelerations by at most ABA_FORCE_KEEP u
- * of the largest (the solve's own were right to rounding, and so are its
- * forces), each joint takes f_IA where every component is within
- * ABA_FORCE_AGREE E_k of f_ID; elsewhere, and after a larger move, f_ID. A
- * free joint's force stays Q. The nodes' accelerations take the refined
- * values. moved: the largest change of an acceleration over the largest
- * acceleration. */
-static void refined_forces(aqs_linkage *L, double moved)
-{
-    const model *m = &L->m;
-    aba_state *a = &L->aba;
-    struct aba_refine *R = L->abarf;
-    double *fia = R->da, dqmax = 0.0, S[36];
-    int32_t k, i, j;
-    for (k = 0; k < m->ne; k++) { /* f_IA (L->cforce holds the solve's forces) */
-        const aba_joint *jt = &a->joint[k];
-        const aba_node *nd = &a->node[k];
-        const double *f = L->cforce + 6 * (size_t)jt->joint;
-        double da[6];
-        for (i = 0; i < 6; i++) da[i] = nd->v.s.acc[i] - R->a1[6 * (size_t)k + i];
-        kin_inertia_mul(nd->IA, da, fia + 6 * (size_t)k);
-        for (i = 0; i < 6; i++) fia[6 * (size_t)k + i] += f[i];
-    }
-    (void)residual(L, NULL, 1); /* f_ID into L->cforce */
-    for (i = 0; i < L->nv; i++) dqmax = fmax(dqmax, fabs(L->qdd[i]));
-    dqmax *= RND_U;
-    for (k = 0; k < m->ne; k++) { /* E: the accelerations' part, outward */
-        const aba_joint *jt = &a->joint[k];
-        const double *Rm = a->node[k].X.R, *p = a->node[k].X.p;
-        const double *v = jt->parent < 0 ? NULL : R->e + 12 * (size_t)jt->parent;
-        double *o = R->e + 12 * (size_t)k;
-        memset(o, 0, 12 * sizeof(double));
-        if (v) {
-            const double t0 = v[3] + fabs(p[1]) * v[2] + fabs(p[2]) * v[1];
-            const double t1 = v[4] + fabs(p[2]) * v[0] + fabs(p[0]) * v[2];
-            const double t2 = v[5] + fabs(p[0]) * v[1] + fabs(p[1]) * v[0];
-            for (i = 0; i < 3; i++) {
-                o[i] = fabs(Rm[i]) * v[0] + fabs(Rm[3 + i]) * v[1] + fabs(Rm[6 + i]) * v[2];
-                o[3 + i] = fabs(Rm[i]) * t0 + fabs(Rm[3 + i]) * t1 + fabs(Rm[6 + i]) * t2;
-            }
-        }
-        if (jt->type == AQS_JOINT_REVOLUTE) {
-            o[2] += dqmax;
-        } else if (jt->type == AQS_JOINT_PRISMATIC) {
-            o[5] += dqmax;
-        } else if (jt->type != AQS_JOINT_FIXED) {
-            const int d = joint_nv(jt->type);
-            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            for (i = 0; i < 6; i++)
-                for (j = 0; j < d; j++) o[i] += fabs(S[i * d + j]) * dqmax;
-        }
-    }
-    for (k = m->ne - 1; k >= 0; k--) { /* E: the forces' part, inward; then the choice */
-        const aba_joint *jt = &a->joint[k];
-        const double *v = R->e + 12 * (size_t)k;
-        double *e = R->e + 12 * (size_t)k + 6, *f = L->cforce + 6 * (size_t)jt->joint, F[36];
-        int agree = jt->type != AQS_JOINT_FREE && moved <= ABA_FORCE_KEEP * RND_U;
-        kin_unpack_inertia(jt->I, F);
-        for (i = 0; i < 6; i++) { /* e holds the children's part */
-            double s = e[i];
-            for (j = 0; j < 6; j++) s += fabs(F[6 * i + j]) * v[j];
-            e[i] = s;
-            agree &= fabs(f[i] - fia[6 * (size_t)k + i]) <= ABA_FORCE_AGREE * s;
-        }
-        if (agree) memcpy(f, fia + 6 * (size_t)k, 6 * sizeof(double));
-        if (jt->parent >= 0) {
-            const double *Rm = a->node[k].X.R, *p = a->node[k].X.p;
-            double *g = R->e + 12 * (size_t)jt->parent + 6, l[3], n[3];
-            for (i = 0; i < 3; i++) {
-                l[i] = fabs(Rm[3 * i]) * e[3] + fabs(Rm[3 * i + 1]) * e[4] + fabs(Rm[3 * i + 2]) * e[5];
-                n[i] = fabs(Rm[3 * i]) * e[0] + fabs(Rm[3 * i + 1]) * e[1] + fabs(Rm[3 * i + 2]) * e[2];
-            }
-            g[0] += n[0] + fabs(p[1]) * l[2] + fabs(p[2]) * l[1];
-            g[1] += n[1] + fabs(p[2]) * l[0] + fabs(p[0]) * l[2];
-            g[2] += n[2] + fabs(p[0]) * l[1] + fabs(p[1]) * l[0];
-            for (i = 0; i < 3; i++) g[3 + i] += l[i];
-        }
-    }
-}
-
-/* The forces' refinement: the bodies' accelerations, in double-double from
- * the refined joint accelerations (R->acc), refined on their own against the
- * residual of the inverse dynamics' forces, a correction kept while it lowers
- * the residual (at most L->refine_max). The joint accelerations are left as
- * they are: the bodies' accelerations carry digits below their rounding,
- * and the inverse dynamics' forces of a heavy subtree are that sensitive to
- * them (docs/math.md 5b, "The forces of a refined solve"). */
-static void refine_accelerations(aqs_linkage *L, struct aba_refine *R)
+/* The forces' refinement: the bodies' accelerations R->acc (double-double,
+ * from the refined joint accelerations; with R->r their residual, rn its
+ * measure, and R->da the correction's accelerations from it), refined on
+ * their own against the same residual, a correction kept while it lowers the
+ * residual (at most L->refine_max); then the inverse dynamics' forces of
+ * them into L->cforce and the bodies' accelerations into the nodes. The
+ * joint accelerations are left as they are: the bodies' accelerations carry
+ * digits below the joint accelerations' rounding, which the inverse
+ * dynamics' forces of a heavy subtree far from its joint need (docs/math.md
+ * 5b, "The forces of a refined solve"). */
+static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
 {
     const size_t n6 = 6 * (size_t)L->m.ne;
-    double res, next;
+    double next, *tmp;
     size_t i;
     int32_t it;
-    dd_accelerations(L);
-    res = residual(L, R->r, 0);
     for (it = 0; it < L->refine_max; it++) {
-        correction(L, R->r, R->dq, R->da);
+        if (it > 0) correction(L, R->r, R->dq, R->da);
         memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
         for (i = 0; i < n6; i++) R->acc[i] = dd_add(R->acc[i], dd_from(R->da[i]));
-        next = residual(L, R->r, 0);
-        if (!(next < res)) {
+        next = residual(L, R->r, R->ftry);
+        if (!(next < rn)) {
             memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
             break;
         }
-        res = next;
+        tmp = R->fcur, R->fcur = R->ftry, R->ftry = tmp;
+        rn = next;
     }
-    for (i = 0; i < n6; i++) L->aba.node[i / 6].v.s.acc[i % 6] = dd_to_double(R->acc[i]);
+    for (i = 0; i < n6; i++) {
+        L->aba.node[i / 6].v.s.acc[i % 6] = dd_to_double(R->acc[i]);
+        L->cforce[6 * (size_t)L->aba.joint[i / 6].joint + i % 6] = R->fcur[i];
+    }
 }
 
-int32_t aba_refine(aqs_linkage *L, double balance, int ia_kept)
+int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
 {
     struct aba_refine *R;
     const size_t nvb = (size_t)L->nv * sizeof(double);
-    double step, next;
-    int32_t kept = 0, it, i, k;
-    if (L->refine_max <= 0 || !(balance > ABA_REFINE_LEVEL * RND_U) || !isfinite(balance)) return 0;
+    double step, next, rn;
+    int32_t kept = 0, it, i;
+    const int unbalanced = balance > ABA_REFINE_LEVEL * RND_U;
+    if (L->refine_max <= 0 || !(unbalanced || heavy) || !(balance == balance) || balance == INFINITY) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
-    memcpy(R->q1, L->qdd, nvb);
     dd_accelerations(L);
-    (void)residual(L, R->r, 0);
+    rn = residual(L, R->r, R->fcur);
     correction(L, R->r, R->dq, R->da);
     step = max_abs(R->dq, L->nv);
+    if (!isfinite(step) || !isfinite(rn)) return 0;
     /* a first correction at the rounding level: the solve had the digits
-     * the problem has, and keeps its answer; its forces too unless the
-     * balance (not the heavy child alone) started the refinement */
+     * the problem has and keeps its joint accelerations; its forces are
+     * refined where the balance says they lost digits (R->acc, R->r and
+     * R->da are those of its state) */
     if (step <= ABA_REFINE_SMALL * RND_U * max_abs(L->qdd, L->nv)) {
-        if (!ia_kept) {
-            refine_accelerations(L, R);
-            (void)residual(L, NULL, 1);
-        }
+        if (unbalanced) refine_forces(L, R, rn);
         return 0;
     }
-    for (it = 0; it < L->refine_max && isfinite(step); it++) {
+    for (it = 0; it < L->refine_max; it++) {
         memcpy(R->q0, L->qdd, nvb);
         for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
         dd_accelerations(L);
-        (void)residual(L, R->r, 0);
+        rn = residual(L, R->r, R->fcur);
         correction(L, R->r, R->dq, R->da);
         next = max_abs(R->dq, L->nv);
         if (!(next <= ABA_REFINE_RATE * step)) { /* no contraction: the previous answer back, bit for bit */
             memcpy(L->qdd, R->q0, nvb);
+            dd_accelerations(L); /* the state's R->acc, R->r, R->da, R->fcur again */
+            rn = residual(L, R->r, R->fcur);
+            correction(L, R->r, R->dq, R->da);
             break;
         }
         kept++;
         step = next;
     }
-    if (kept) {
-        double moved = 0.0, qm = 0.0;
-        for (i = 0; i < L->nv; i++) {
-            moved = fmax(moved, fabs(L->qdd[i] - R->q1[i]));
-            qm = fmax(qm, fabs(L->qdd[i]));
-        }
-        if (ia_kept) /* the solve's own bodies' accelerations, for f_IA */
-            for (k = 0; k < L->m.ne; k++) memcpy(R->a1 + 6 * (size_t)k, L->aba.node[k].v.s.acc, 6 * sizeof(double));
-        refine_accelerations(L, R);
-        if (ia_kept) {
-            refined_forces(L, qm > 0.0 ? moved / qm : 0.0);
-        } else {
-            /* the inverse dynamics' forces (the solve's own, f = IA a + pA,
-             * are what the balance found unbalanced) */
-            (void)residual(L, NULL, 1);
-        }
-    }
+    refine_forces(L, R, rn);
     return kept;
 }

@@ -29,23 +29,15 @@
  * residual in double-double"). */
 #define ABA_REFINE_RATE 0.5
 #define ABA_REFINE_SMALL 4.0
-/* A refined solve keeps a joint's force moved from its own by its
- * articulated inertia where that is within this multiple of the inverse
- * dynamics' sensitivity of the inverse dynamics' force (abarefine.c,
- * refined_forces). */
-#define ABA_FORCE_AGREE 8.0
-/* ... and only where the refinement moved no acceleration by more than this
- * many u of the largest. */
-#define ABA_FORCE_KEEP 256.0
-
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
- * L->cforce set): measure the residual and refine where it exceeds the
- * level, at most L->refine_max corrections. Returns the corrections kept
- * (their forces then in L->cforce). With ia_kept (the nodes' IA still the
- * solve's articulated inertias) the refined forces are the solve's own
- * moved by IA times the change of each body's acceleration, else those of
- * the inverse dynamics. Out of memory: 0, the answer as it was. */
-int32_t aba_refine(aqs_linkage *L, double balance, int ia_kept);
+ * L->cforce set): where the balance exceeds the level, or always on a
+ * linkage with a heavy child (heavy), refine the joint accelerations (at
+ * most L->refine_max corrections) and then the forces (the inverse
+ * dynamics' of the bodies' accelerations, refined on their own); a heavy
+ * child's balanced solve whose first correction is at the rounding level
+ * keeps its answer and forces. Returns the corrections of the joint
+ * accelerations kept. Out of memory: 0, the answer as it was. */
+int32_t aba_refine(aqs_linkage *L, double balance, int heavy);
 /* Release the refinement's arrays (at destroy and when the model changes). */
 void aba_refine_free(aqs_linkage *L);
 
