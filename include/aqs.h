@@ -951,18 +951,22 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  largest joint force (floating trees of very different masses under
  *  tilted gravity, forces up to 3.6e-10 off while every body balanced), at
  *  most max_corrections corrections
- *  qdd += ABA^-1(Q - ID(qdd)) by the solve's own factors, each kept only when
- *  it lowers the inverse-dynamics residual (2e-16 .. 5e-14 there); a solve
- *  that kept one takes the inverse dynamics' constraint forces of its
- *  refined accelerations. On a linkage where some joint's child composite
- *  is more than 1e3 times heavier than its parent composite, every solve
- *  takes that residual and tries a correction (the balance, formed with the
- *  solve's own forces, misses a heavy body held by light links: up to
- *  1.1e-7 off; 2e-16 refined; such a solve costs about 1.8x: docs/math.md
- *  5b). Elsewhere the answer is bit for bit the
- *  unrefined one. Its arrays (3 doubles per dof and 12 per joint) are
- *  allocated at the first solve that refines; if that fails, the solve
- *  succeeds unrefined. max_corrections 0 turns the check off too.
+ *  qdd += ABA^-1(Q - ID(qdd)) by the solve's own factors, the residual
+ *  Q - ID(qdd) in double-double arithmetic (about 106 bits), each kept
+ *  while the corrections shrink by half or more (2e-16 .. 4e-15 there);
+ *  then the bodies' accelerations are refined on their own against that
+ *  residual, and the solve takes the inverse dynamics' constraint forces of
+ *  them. On a linkage where some joint's child composite is more than 1e2
+ *  times heavier than its parent composite, every solve takes that residual
+ *  and a correction (the balance, formed with the solve's own forces,
+ *  misses a heavy body held by light links: up to 1.5e-7 off, 2.5e-10 with
+ *  a residual in double; 5e-16 refined); a correction at the rounding
+ *  level there leaves the answer as it is. A refining solve costs about
+ *  3 .. 14x an unrefined one (docs/math.md 5b, "The residual in
+ *  double-double"). Elsewhere the answer is bit for bit the unrefined one.
+ *  Its arrays (4 doubles per dof and 60 per joint) are allocated at the
+ *  first solve that refines; if that fails, the solve succeeds unrefined.
+ *  max_corrections 0 turns the check off too.
  *
  *  The exact DCA solve (docs/math.md 13a): after a
  *  solve that computes every joint through the DCA's back-substitution

@@ -21,15 +21,16 @@
  * correction is kept when the next one is at most half as large (the
  * iteration contracts: on a heavy body held by light links the residual
  * cannot measure the error, a rounding of the heavy joints' accelerations
- * leaving a larger one than the light links' whole error); at most
- * L->refine_max of them (aqs_linkage_set_exact_refinement, which also
- * switches the balance off at 0). The forces: the bodies' accelerations are
- * refined on their own against the same residual (they carry digits below
- * the joint accelerations' rounding), and the inverse dynamics' forces of
- * them are taken, or where the solve's articulated inertias are kept, its
- * own forces moved by them where that agrees (refined_forces). A solve
- * whose first correction is at the rounding level refines its forces only
- * when the balance (not a heavy child alone) started it.
+ * leaving a larger one than the light links' whole error), and one at the
+ * rounding level ends it unapplied; at most L->refine_max of them
+ * (aqs_linkage_set_exact_refinement, which also switches the balance off at
+ * 0). The forces: the bodies' accelerations are refined on their own
+ * against the same residual (they carry digits below the joint
+ * accelerations' rounding, which the inverse dynamics' forces of a heavy
+ * subtree far from its joint need), and the solve takes the inverse
+ * dynamics' forces of them. A heavy child's solve (always refined) whose
+ * first correction is at the rounding level and whose balance holds keeps
+ * its own forces.
  * Scratch: the nodes' pA (zero between solves, left zero) and, once a solve
  * refines, the arrays of struct aba_refine (LK_MEM_EXACT, kept). */
 #include "abarefine.h"
@@ -48,6 +49,8 @@ struct aba_refine {
     double *r;    /* nv: the residual */
     double *dq;   /* nv: a correction (the loads pass's u first) */
     double *q0;   /* nv: the accelerations before the correction */
+    double *r0;   /* nv: their residual */
+    double *da0;  /* 6 ne: its correction's bodies' accelerations */
     ddouble *acc0; /* 6 ne: R->acc before a correction of the forces' refinement */
     double *fcur; /* 6 ne: the joint forces of R->acc's state, ABA order */
     double *ftry; /* 6 ne: those of a correction tried */
@@ -63,6 +66,8 @@ void aba_refine_free(aqs_linkage *L)
     lk_free(L, R->r);
     lk_free(L, R->dq);
     lk_free(L, R->q0);
+    lk_free(L, R->r0);
+    lk_free(L, R->da0);
     lk_free(L, R->acc0);
     lk_free(L, R->fcur);
     lk_free(L, R->ftry);
@@ -84,11 +89,13 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
     R->r = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->dq = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
     R->q0 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
+    R->r0 = lk_calloc_in(L, LK_MEM_EXACT, nv, sizeof(double));
+    R->da0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->acc0 = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(ddouble));
     R->fcur = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->ftry = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
     R->da = lk_calloc_in(L, LK_MEM_EXACT, ne6, sizeof(double));
-    if (!R->acc || !R->f || !R->r || !R->dq || !R->q0 || !R->acc0 || !R->fcur || !R->ftry || !R->da) {
+    if (!R->acc || !R->f || !R->r || !R->dq || !R->q0 || !R->r0 || !R->da0 || !R->acc0 || !R->fcur || !R->ftry || !R->da) {
         aba_refine_free(L);
         return NULL;
     }
@@ -357,7 +364,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
 int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
 {
     struct aba_refine *R;
-    const size_t nvb = (size_t)L->nv * sizeof(double);
+    const size_t nvb = (size_t)L->nv * sizeof(double), n6 = 6 * (size_t)L->m.ne;
     double step, next, rn;
     int32_t kept = 0, it, i;
     const int unbalanced = balance > ABA_REFINE_LEVEL * RND_U;
@@ -378,7 +385,12 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
         return 0;
     }
     for (it = 0; it < L->refine_max; it++) {
-        memcpy(R->q0, L->qdd, nvb);
+        const double rn0 = rn;
+        memcpy(R->q0, L->qdd, nvb); /* the state, to go back to */
+        memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
+        memcpy(R->r0, R->r, nvb);
+        memcpy(R->da0, R->da, n6 * sizeof(double));
+        memcpy(R->ftry, R->fcur, n6 * sizeof(double));
         for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
         dd_accelerations(L);
         rn = residual(L, R->r, R->fcur);
@@ -386,13 +398,16 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
         next = max_abs(R->dq, L->nv);
         if (!(next <= ABA_REFINE_RATE * step)) { /* no contraction: the previous answer back, bit for bit */
             memcpy(L->qdd, R->q0, nvb);
-            dd_accelerations(L); /* the state's R->acc, R->r, R->da, R->fcur again */
-            rn = residual(L, R->r, R->fcur);
-            correction(L, R->r, R->dq, R->da);
+            memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
+            memcpy(R->r, R->r0, nvb);
+            memcpy(R->da, R->da0, n6 * sizeof(double));
+            memcpy(R->fcur, R->ftry, n6 * sizeof(double));
+            rn = rn0;
             break;
         }
         kept++;
         step = next;
+        if (step <= ABA_REFINE_SMALL * RND_U * max_abs(L->qdd, L->nv)) break; /* the next at the rounding level */
     }
     refine_forces(L, R, rn);
     return kept;

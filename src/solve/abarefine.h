@@ -24,9 +24,10 @@
 
 /* A correction is kept when the next one, formed from the residual it
  * leaves, is at most ABA_REFINE_RATE times as large (the iteration
- * contracts). A first correction of at most ABA_REFINE_SMALL u of the
- * largest acceleration leaves the solve's answer as it is (docs/math.md §5b, "The
- * residual in double-double"). */
+ * contracts). A correction of at most ABA_REFINE_SMALL u of the largest
+ * acceleration is not applied and ends the joint accelerations' refinement
+ * (as the first one: the solve's answer stays as it is; docs/math.md §5b,
+ * "The residual in double-double"). */
 #define ABA_REFINE_RATE 0.5
 #define ABA_REFINE_SMALL 4.0
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and

@@ -1136,8 +1136,10 @@ class Linkage:
         only when it lowers the residual (aqs_linkage_set_exact_refinement,
         docs/math.md 13a). The articulated-body solve (the default exact
         solver) likewise takes at most max_corrections corrections where its
-        balance of forces says it lost digits, and 0 turns that check off
-        (docs/math.md 5b). Any phase."""
+        balance of forces says it lost digits (always where a joint's child is
+        more than 1e2 times heavier than its parent; the residual in
+        double-double arithmetic), and 0 turns that check off (docs/math.md
+        5b). Any phase."""
         f = "aqs_linkage_set_exact_refinement"
         self._call(f, _index(max_corrections, f, "max_corrections"))
 
