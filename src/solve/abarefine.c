@@ -326,7 +326,6 @@ static double max_abs(const double *v, int32_t n)
     return e;
 }
 
-
 /* The forces' refinement: the bodies' accelerations R->acc (double-double,
  * from the refined joint accelerations; with R->r their residual, rn its
  * measure, and R->da the correction's accelerations from it), refined on
