@@ -41,6 +41,7 @@
 #include "ddouble.h"
 #include "dense.h"
 #include "kintree.h"
+#include "residual.h"
 #include "rounding.h"
 
 struct aba_refine {
@@ -100,150 +101,6 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
         return NULL;
     }
     return R;
-}
-
-/* Double-double forms of aba.c's transforms: o = X v (v a motion in the
- * parent's frame), g += X^T f, o = I v (I packed). */
-static void dd_motion_from_parent(const pose *P, const ddouble *v, ddouble *o)
-{
-    const double *R = P->R, *p = P->p;
-    ddouble t[3];
-    int i;
-    t[0] = dd_add_mul(dd_add_mul(v[3], -p[1], v[2]), p[2], v[1]);
-    t[1] = dd_add_mul(dd_add_mul(v[4], -p[2], v[0]), p[0], v[2]);
-    t[2] = dd_add_mul(dd_add_mul(v[5], -p[0], v[1]), p[1], v[0]);
-    for (i = 0; i < 3; i++) {
-        o[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[i], v[0]), R[3 + i], v[1]), R[6 + i], v[2]);
-        o[3 + i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[i], t[0]), R[3 + i], t[1]), R[6 + i], t[2]);
-    }
-}
-
-static void dd_force_to_parent_add(const pose *P, const ddouble *f, ddouble *g)
-{
-    const double *R = P->R, *p = P->p;
-    ddouble l[3], n[3];
-    int i;
-    for (i = 0; i < 3; i++) {
-        l[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[3 * i], f[3]), R[3 * i + 1], f[4]), R[3 * i + 2], f[5]);
-        n[i] = dd_add_mul(dd_add_mul(dd_add_mul(dd_from(0.0), R[3 * i], f[0]), R[3 * i + 1], f[1]), R[3 * i + 2], f[2]);
-    }
-    g[0] = dd_add(g[0], dd_add_mul(dd_add_mul(n[0], p[1], l[2]), -p[2], l[1]));
-    g[1] = dd_add(g[1], dd_add_mul(dd_add_mul(n[1], p[2], l[0]), -p[0], l[2]));
-    g[2] = dd_add(g[2], dd_add_mul(dd_add_mul(n[2], p[0], l[1]), -p[1], l[0]));
-    for (i = 0; i < 3; i++) g[3 + i] = dd_add(g[3 + i], l[i]);
-}
-
-static void dd_inertia_mul(const double *I, const ddouble *v, ddouble *o)
-{
-    double F[36];
-    int i, j;
-    kin_unpack_inertia(I, F);
-    for (i = 0; i < 6; i++) {
-        ddouble s = dd_from(0.0);
-        for (j = 0; j < 6; j++) s = dd_add_mul(s, F[6 * i + j], v[j]);
-        o[i] = s;
-    }
-}
-
-/* The bodies' accelerations (minus g) from L->qdd into R->acc in
- * double-double: a_c = X a_p + S qdd outward from a_0 = -g. */
-static void dd_accelerations(aqs_linkage *L)
-{
-    const model *m = &L->m;
-    const aba_state *a = &L->aba;
-    struct aba_refine *R = L->abarf;
-    double S[36];
-    ddouble g[6];
-    int32_t k, i, j;
-    for (i = 0; i < 3; i++) {
-        g[i] = dd_from(0.0);
-        g[3 + i] = dd_from(-L->gravity[i]);
-    }
-    for (k = 0; k < m->ne; k++) {
-        const aba_joint *jt = &a->joint[k];
-        const double *q = L->qdd + jt->voff;
-        ddouble *ac = R->acc + 6 * (size_t)k;
-        dd_motion_from_parent(&a->node[k].X, jt->parent < 0 ? g : R->acc + 6 * (size_t)jt->parent, ac);
-        if (jt->type == AQS_JOINT_REVOLUTE) {
-            ac[2] = dd_add(ac[2], dd_from(q[0])); /* S = e_z, aligned */
-        } else if (jt->type == AQS_JOINT_PRISMATIC) {
-            ac[5] = dd_add(ac[5], dd_from(q[0]));
-        } else if (jt->type != AQS_JOINT_FIXED) {
-            const int d = joint_nv(jt->type);
-            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            for (i = 0; i < 6; i++)
-                for (j = 0; j < d; j++) ac[i] = dd_add_prod(ac[i], S[i * d + j], q[j]);
-        }
-    }
-}
-
-/* The residual of the bodies' accelerations in R->acc (double-double; from
- * the joint accelerations by dd_accelerations, or refined on their own by
- * refine_forces): into r when r is not NULL; the joint forces (rounded) into
- * forces when not NULL, 6 a joint in the ABA order. Inverse dynamics in double-double:
- * f_c = I_c a_c - f_ext,c + sum_children X^T f_child inward, r = Q - S^T f_c
- * rounded once (docs/math.md 5b, "The residual in double-double"): in
- * double, a heavy body's I a and its weight cancel to u times their size,
- * which light links' joints would see as their whole residual. Returns
- * max |r| over the larger of the largest joint force and the sum of the
- * bodies' terms |I_c a_c| + m_c |g| (torques weighed by 1/l as in
- * rounding.c; 0 when both are 0; NaN when a value is not finite). */
-static double residual(aqs_linkage *L, double *r, double *forces)
-{
-    const model *m = &L->m;
-    aba_state *a = &L->aba;
-    struct aba_refine *R = L->abarf;
-    const double il = m->length > 0.0 ? 1.0 / m->length : 1.0;
-    const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
-    double rmax = 0.0, smax = 0.0, tsum = 0.0, S[36];
-    int32_t k, i, j, bad = 0;
-    memset(R->f, 0, 6 * (size_t)m->ne * sizeof(ddouble));
-    for (i = 0; i < m->nloaded_comps; i++) {
-        const int32_t c = m->loaded_comps[i];
-        ddouble *f = R->f + 6 * (size_t)a->pos_of_comp[c];
-        for (j = 0; j < 6; j++) f[j] = dd_from(-m->comp_force[6 * c + j]);
-    }
-    for (k = m->ne - 1; k >= 0; k--) {
-        const aba_joint *jt = &a->joint[k];
-        ddouble *f = R->f + 6 * (size_t)k, t[6];
-        double e = 0.0, fl[6];
-        dd_inertia_mul(jt->I, R->acc + 6 * (size_t)k, t);
-        /* the bodies' terms, their norms summed: I (a - g) and the weight m |g| (in
-         * a free fall both are 0 and m |g|, and so are the joint forces) */
-        tsum += (fabs(t[0].hi) + fabs(t[1].hi) + fabs(t[2].hi)) * il + fabs(t[3].hi) + fabs(t[4].hi) +
-                fabs(t[5].hi) + jt->I[KIN_PC] * gn;
-        for (i = 0; i < 6; i++) {
-            f[i] = dd_add(f[i], t[i]);
-            fl[i] = dd_to_double(f[i]);
-        }
-        if (jt->type == AQS_JOINT_REVOLUTE || jt->type == AQS_JOINT_PRISMATIC) {
-            const int rev = jt->type == AQS_JOINT_REVOLUTE;
-            const double v = dd_to_double(dd_add(dd_from(L->tau[jt->voff]), dd_neg(f[rev ? 2 : 5])));
-            if (r) r[jt->voff] = v;
-            e = fabs(v) * (rev ? il : 1.0);
-        } else if (jt->type != AQS_JOINT_FIXED) {
-            const int d = joint_nv(jt->type);
-            joint_subspace_aligned(&L->joints[jt->joint], L->q + jt->qoff, S);
-            for (j = 0; j < d; j++) {
-                ddouble s = dd_from(L->tau[jt->voff + j]);
-                double v;
-                for (i = 0; i < 6; i++) s = dd_add_mul(s, -S[i * d + j], f[i]);
-                v = dd_to_double(s);
-                if (r) r[jt->voff + j] = v;
-                v = fabs(v);
-                if (S[0 * d + j] != 0.0 || S[1 * d + j] != 0.0 || S[2 * d + j] != 0.0) v *= il; /* a torque */
-                if (!(v <= e)) e = v; /* NaN too */
-            }
-        }
-        rmax = fmax(rmax, e);
-        bad |= !(e == e); /* fmax drops a NaN */
-        smax = fmax(smax, (fabs(fl[0]) + fabs(fl[1]) + fabs(fl[2])) * il + fabs(fl[3]) + fabs(fl[4]) + fabs(fl[5]));
-        if (forces) memcpy(forces + 6 * (size_t)k, fl, sizeof fl);
-        if (jt->parent >= 0) dd_force_to_parent_add(&a->node[k].X, f, R->f + 6 * (size_t)jt->parent);
-    }
-    smax = fmax(smax, tsum);
-    if (bad || !isfinite(smax)) return NAN;
-    return smax > 0.0 ? rmax / smax : (rmax > 0.0 ? INFINITY : 0.0);
 }
 
 /* dq = ABA^-1(r) by the solve's factors, its accelerations into da:
@@ -346,7 +203,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
         if (it > 0) correction(L, R->r, R->dq, R->da);
         memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
         for (i = 0; i < n6; i++) R->acc[i] = dd_add(R->acc[i], dd_from(R->da[i]));
-        next = residual(L, R->r, R->ftry);
+        next = residual_dd_eval(L, R->acc, R->f, R->r, R->ftry);
         if (!(next < rn)) {
             memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
             break;
@@ -370,8 +227,8 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
     if (L->refine_max <= 0 || !(unbalanced || heavy) || !(balance == balance) || balance == INFINITY) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
-    dd_accelerations(L);
-    rn = residual(L, R->r, R->fcur);
+    residual_dd_accelerations(L, L->qdd, R->acc);
+    rn = residual_dd_eval(L, R->acc, R->f, R->r, R->fcur);
     correction(L, R->r, R->dq, R->da);
     step = max_abs(R->dq, L->nv);
     if (!isfinite(step) || !isfinite(rn)) return 0;
@@ -391,8 +248,8 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
         memcpy(R->da0, R->da, n6 * sizeof(double));
         memcpy(R->ftry, R->fcur, n6 * sizeof(double));
         for (i = 0; i < L->nv; i++) L->qdd[i] += R->dq[i];
-        dd_accelerations(L);
-        rn = residual(L, R->r, R->fcur);
+        residual_dd_accelerations(L, L->qdd, R->acc);
+        rn = residual_dd_eval(L, R->acc, R->f, R->r, R->fcur);
         correction(L, R->r, R->dq, R->da);
         next = max_abs(R->dq, L->nv);
         if (!(next <= ABA_REFINE_RATE * step)) { /* no contraction: the previous answer back, bit for bit */

@@ -6,6 +6,7 @@
 #ifndef AQS_RESIDUAL_H
 #define AQS_RESIDUAL_H
 
+#include "ddouble.h"
 #include "linkage.h"
 
 /* Each composite's frame in its parent's at the current positions, into
@@ -44,5 +45,21 @@ void residual_mass_mul(aqs_linkage *L, const double *v, double *Mv);
  * L->cforce's convention: the force of the joint on its child composite, in
  * the composite's frame); fixed joints' entries are not written. */
 void residual_forces(const aqs_linkage *L, double *cforce);
+
+/* The same in double-double (src/base/ddouble.h; docs/math.md §5b, "The
+ * residual in double-double"), for the articulated-body solve's refinement
+ * (src/solve/abarefine.c), with its own storage (the node values are not
+ * touched; residual_poses or an articulated-body solve sets the poses).
+ * residual_dd_accelerations: the bodies' accelerations a_c (6 per joint, the
+ * ABA order, relative to free fall) of qdd, outward from a_0 = -g. */
+void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble *acc);
+/* r = Q - S^T f with f_c = I_c a_c - f_ext,c + sum_children X^T f_child
+ * formed from acc inward, rounded once: into r (nv) when not NULL; the
+ * joint forces rounded into forces (6 per joint, the ABA order) when not
+ * NULL; fw: 6 ne scratch. Returns max |r| over the larger of the largest
+ * joint force and the sum of the bodies' terms |I_c a_c| + m_c |g| (torques
+ * weighed by 1/l as in rounding.c; 0 when both are 0; NaN when a value is
+ * not finite). */
+double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces);
 
 #endif
