@@ -15,9 +15,10 @@
  * (docs/math.md §13a). The articulated-body solve's refinement takes it in
  * double-double (residual_dd_*: on a heavy body held by light links the
  * heavy weights' rounding in double is the light links' whole residual,
- * docs/math.md §5b, "The residual in double-double"). The same pass at zero gravity, no load and no joint force is the
- * product M v by the joint-space inertia matrix (residual_mass_mul, the
- * operator of the refinement's GMRES). Scratch: the articulated-body
+ * docs/math.md §5b, "The residual in double-double"). The same pass at zero
+ * gravity, no load and no joint force is the product M v by the joint-space
+ * inertia matrix (residual_mass_mul, the operator of the refinement's
+ * GMRES). Scratch: the articulated-body
  * solver's per-solve node values (X, and v.s for a_c and f_c), which every
  * solve that reads them rewrites first. */
 #include "residual.h"
