@@ -193,10 +193,12 @@ static void test_projection(void **state)
              * refined by the projection check to 8.9e-16): since 2026-12-05 a
              * free joint's force is Q exactly (src/solve/aba.c) and the
              * unrefined solve is within 1e-14 (measured 1.7e-15). Its
-             * masses spread 1e3: a child more than 1e3 times heavier than its
-             * parent makes every solve take the residual (model.heavy_child,
+             * masses spread 1e3: a child more than 1e2 times heavier than its
+             * parent makes every solve take the residual (model.heavy_ratio,
              * docs/math.md 5b), whose corrections are then at the rounding
-             * level (measured 3, to 7.5e-17 and forces 1.0e-15) */
+             * level (with the residual in double 3 were kept, to 7.5e-17 and
+             * forces 1.0e-15; in double-double the first is at 4 u and the
+             * solve keeps its answer: 2.0e-16, forces 1.7e-15) */
             assert_true(plain.force <= 1e-14);
             assert_true(aba.force <= 1e-14);
             assert_true(aba.acc <= 1e-14);

@@ -138,13 +138,6 @@ struct KnownBad {
     const char *why;
     bool scaled_only = false;  // only with --length-unit other than 1
 };
-// The square-root form (the default; docs/math.md section 4a), measured 2026-12-02. The
-// chains, the point masses (welded, and lone since the rigid join in inertia form), the
-// floating bases (since the world's free joint is joined last) and the prismatic chains
-// pass; since the exact DCA solve is refined (docs/math.md §13a) so do its alternating-mass
-// chains to 1e6, near-equilibrium trees and light distal chains (and since 2026-12-04 the
-// adaptive solves' computed joints are refined above an estimate of 1e-10, §13c). These do
-// not reach 10x the ABA yet (and the adaptive "true <= bound + 10x ABA" fails with them):
 // Known bad for one check only: the exact DCA's joint forces within 10x of the refined ABA's.
 // In millimetres (--length-unit 1000) only: the exact DCA's joint forces 1.9e-13 of the largest
 // (1.5e-16 in metres; unchanged since before 2026-12-05), more than 10x the refined ABA's since
@@ -153,11 +146,18 @@ struct KnownBad {
 const KnownBad kKnownBadDcaForceVsRefined[] = {
     {"altmass/planar/heavytip2/r=1e+06/n=12/seed=3", true, false, "mm: DCA forces 1.9e-13 vs the refined ABA 7e-17", true},
 };
+// The square-root form (the default; docs/math.md section 4a), measured 2026-12-02. The
+// chains, the point masses (welded, and lone since the rigid join in inertia form), the
+// floating bases (since the world's free joint is joined last) and the prismatic chains
+// pass; since the exact DCA solve is refined (docs/math.md §13a) so do its alternating-mass
+// chains to 1e6, near-equilibrium trees and light distal chains (and since 2026-12-04 the
+// adaptive solves' computed joints are refined above an estimate of 1e-10, §13c). These do
+// not reach 10x the ABA yet (and the adaptive "true <= bound + 10x ABA" fails with them):
 const std::vector<KnownBad> kKnownBad = {
     // Planar chains with heavy and light links in given patterns (2026-12-05): some adaptive
     // solves' computed joints were 1e2 .. 5e3x the ABA's error (certified, within their bound)
     // under the adaptive refinement's level, until the level was taken 1e3 times lower on
-    // linkages with a heavy child (model.heavy_child; docs/math.md §13c): they pass.
+    // linkages with a heavy child (model.heavy_ratio above 1e3; docs/math.md §13c): they pass.
     // Long mode, 10^4 links: the exact DCA passes at 1e3, 1e6 and, since GMRES restarts from
     // the true residual with up to 128 Krylov steps a cycle, 1e9 (docs/math.md §13a).
     // Adaptive solves that skip joints carry the unrefined DCA's rounding in their computed
