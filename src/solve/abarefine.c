@@ -224,7 +224,7 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
     double step, next, rn;
     int32_t kept = 0, it, i;
     const int unbalanced = balance > ABA_REFINE_LEVEL * RND_U;
-    if (L->refine_max <= 0 || !(unbalanced || heavy) || !(balance == balance) || balance == INFINITY) return 0;
+    if (L->refine_max <= 0 || !(unbalanced || heavy) || !isfinite(balance)) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
     residual_dd_accelerations(L, L->qdd, R->acc);
