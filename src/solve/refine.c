@@ -126,6 +126,10 @@
 /* ... once the bodies' accelerations are refined: the first correction
  * lowered the residual by at least this factor (state_forces). */
 #define STATE_CONTRACT 16.0
+/* ... and stopped where the next correction's move of the forces, predicted
+ * as the last one's times the residual's contraction, is below this many u
+ * of the largest force (state_forces). */
+#define STATE_FORCE_STOP 0.125
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -141,6 +145,11 @@ struct refine {
     int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
     double (*h)[KRYLOV_MAX]; /* KRYLOV_MAX + 1 rows: the Hessenberg matrix, with the basis (132 KB: not
                                 on the stack of the caller's thread) */
+    ddouble *sacc;  /* 6 ne: the bodies' accelerations of a state correction in double-double */
+    ddouble *sacc0; /* 6 ne: the same before a correction */
+    ddouble *sfw;   /* 6 ne: scratch of the double-double residual */
+    double *fcur;   /* 6 ne: the joint forces of sacc's state, ABA order */
+    double *ftry;   /* 6 ne: those of a correction tried */
 };
 
 void refine_free(aqs_linkage *L)
@@ -158,6 +167,11 @@ void refine_free(aqs_linkage *L)
     lk_free(L, R->v);
     lk_free(L, R->z);
     lk_free(L, R->h);
+    lk_free(L, R->sacc);
+    lk_free(L, R->sacc0);
+    lk_free(L, R->sfw);
+    lk_free(L, R->fcur);
+    lk_free(L, R->ftry);
     lk_free(L, R);
     L->rf = NULL;
 }
@@ -224,6 +238,32 @@ static int krylov_alloc(aqs_linkage *L, int32_t steps)
     R->v = v;
     R->z = z;
     R->kcap = steps;
+    return 0;
+}
+
+/* The state correction's double-double arrays, at the first solve whose
+ * forces state_forces refines. Returns 0, or -1 when out of memory (the
+ * arrays as they were: none). */
+static int state_alloc(aqs_linkage *L)
+{
+    struct refine *R = L->rf;
+    const size_t n6 = 6 * (size_t)L->m.ne + 1;
+    if (R->sacc) return 0;
+    R->sacc = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
+    R->sacc0 = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
+    R->sfw = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
+    R->fcur = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(double));
+    R->ftry = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(double));
+    if (!R->sacc || !R->sacc0 || !R->sfw || !R->fcur || !R->ftry) {
+        lk_free(L, R->sacc);
+        lk_free(L, R->sacc0);
+        lk_free(L, R->sfw);
+        lk_free(L, R->fcur);
+        lk_free(L, R->ftry);
+        R->sacc = R->sacc0 = R->sfw = NULL;
+        R->fcur = R->ftry = NULL;
+        return -1;
+    }
     return 0;
 }
 
@@ -515,14 +555,26 @@ static double id_force_error(aqs_linkage *L)
  * corrections kept when their forces are taken (L->cforce refined), -1 when
  * the back-substitution's forces balance at the refined a_c, 0 when it did
  * not run or its a_c is not trusted (L->cforce as it was in both). Between
- * save_loads(L, 0) and (L, 1). */
+ * save_loads(L, 0) and (L, 1).
+ * The state and its residual are in double-double (src/solve/residual.c,
+ * residual_dd_*, as the articulated-body refinement has them), the
+ * corrections in double: in double the residual's own rounding, u |I_c a_c|
+ * of a heavy body, was the floor of the forces (a planar chain with 1e6 kg
+ * links held by 1 kg ones, in millimetres: 1.9e-13 of the largest force,
+ * the double-double state 7.0e-17). After a kept correction it stops where
+ * the next one would move the forces by less than STATE_FORCE_STOP u: the
+ * residual contracts by 1e-6 .. 1e-7 a correction where the DCA solves it
+ * well, so one correction is the rule (a double-double pass is about 13x a
+ * double one, docs/bench.md). */
 static int32_t state_forces(aqs_linkage *L)
 {
     struct refine *R = L->rf;
-    const aba_state *a = &L->aba;
+    aba_state *a = &L->aba;
     const double lim = STATE_BALANCE * 1.1102230246251565e-16, il = L->m.length > 0.0 ? 1.0 / L->m.length : 1.0;
-    double rn, fm = 0.0, *tmp, bal, scale;
+    const size_t n6 = 6 * (size_t)L->m.ne;
+    double rn, fm = 0.0, *tmp, bal, scale, dmax, fmax_;
     int32_t kept = 0, it, k;
+    size_t i;
     int converged = 0;
     for (k = 0; k < L->m.ne; k++) { /* the largest joint force, as residual_balance weighs it */
         const double *c = L->cforce + 6 * (size_t)a->joint[k].joint;
@@ -531,27 +583,38 @@ static int32_t state_forces(aqs_linkage *L)
     residual_accelerations(L, L->qdd);
     bal = residual_balance(L, L->cforce, R->acc, &scale); /* at a_c(qdd) */
     if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return 0;
-    rn = residual_eval_acc(L, R->r);
+    if (state_alloc(L) != 0) return 0; /* out of memory: the forces as they are */
+    residual_dd_accelerations(L, L->qdd, R->sacc);
+    rn = residual_dd_eval(L, R->sacc, R->sfw, R->r, R->fcur);
     if (!isfinite(rn) || !(rn > 0.0)) return 0;
     for (it = 0; it < L->refine_max && rn > 0.0; it++) {
         double rn1;
         if (correction(L, R->r, 0) != 0) break;
-        residual_acc_add(L, R->dq, R->acc);
-        rn1 = residual_eval_acc(L, R->r2);
+        memcpy(R->sacc0, R->sacc, n6 * sizeof(ddouble));
+        residual_dd_acc_add(L, R->dq, R->sacc);
+        rn1 = residual_dd_eval(L, R->sacc, R->sfw, R->r2, R->ftry);
         if (!(rn1 < rn)) { /* at the residual's floor */
-            residual_acc_restore(L, R->acc);
+            memcpy(R->sacc, R->sacc0, n6 * sizeof(ddouble));
             break;
         }
         if (it == 0) converged = rn1 * STATE_CONTRACT <= rn;
+        for (i = 0, dmax = fmax_ = 0.0; i < n6; i++) {
+            dmax = fmax(dmax, fabs(R->ftry[i] - R->fcur[i]));
+            fmax_ = fmax(fmax_, fabs(R->ftry[i]));
+        }
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
-        rn = rn1;
+        tmp = R->fcur, R->fcur = R->ftry, R->ftry = tmp;
         kept++;
+        /* the next correction would move the forces by about this one's move
+         * times the residual's contraction: below the forces' rounding, stop */
+        if (dmax * (rn1 / rn) <= STATE_FORCE_STOP * 1.1102230246251565e-16 * fmax_) break;
+        rn = rn1;
     }
     if (!converged) return 0;
+    for (i = 0; i < n6; i++) a->node[i / 6].v.s.acc[i % 6] = dd_to_double(R->sacc[i]);
     bal = residual_balance(L, L->cforce, R->acc, &scale);
     if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return -1;
-    (void)residual_eval_acc(L, R->r2); /* the kept state's forces */
-    residual_forces(L, L->cforce);
+    for (i = 0; i < n6; i++) L->cforce[6 * (size_t)a->joint[i / 6].joint + i % 6] = R->fcur[i];
     if (L->m.nwelded > 0) aba_welded_forces(L);
     return kept;
 }

@@ -15,7 +15,9 @@
  * (docs/math.md §13a). The articulated-body solve's refinement takes it in
  * double-double (residual_dd_*: on a heavy body held by light links the
  * heavy weights' rounding in double is the light links' whole residual,
- * docs/math.md §5b, "The residual in double-double"). The same pass at zero
+ * docs/math.md §5b, "The residual in double-double"), and so does the exact
+ * DCA's refinement of the bodies' accelerations for its forces (refine.c,
+ * state_forces). The same pass at zero
  * gravity, no load and no joint force is the product M v by the joint-space
  * inertia matrix (residual_mass_mul, the operator of the refinement's
  * GMRES). Scratch: the articulated-body
@@ -342,4 +344,13 @@ double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, d
     smax = fmax(smax, tsum);
     if (bad || !isfinite(smax)) return NAN;
     return smax > 0.0 ? rmax / smax : (rmax > 0.0 ? INFINITY : 0.0);
+}
+
+void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc)
+{
+    const aba_state *a = &L->aba;
+    int32_t k, i;
+    outward(L, dq, 1);
+    for (k = 0; k < L->m.ne; k++)
+        for (i = 0; i < 6; i++) acc[6 * (size_t)k + i] = dd_add(acc[6 * (size_t)k + i], dd_from(a->node[k].v.s.acc[i]));
 }

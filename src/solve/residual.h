@@ -61,5 +61,9 @@ void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble 
  * weighed by 1/l as in rounding.c; 0 when both are 0; NaN when a value is
  * not finite). */
 double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces);
+/* acc += the bodies' accelerations of dq from rest (6 per joint, the ABA
+ * order), formed in double (a correction's) and added in double-double;
+ * overwrites the node values' accelerations (v.s.acc). */
+void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc);
 
 #endif

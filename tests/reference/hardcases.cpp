@@ -136,15 +136,6 @@ struct KnownBad {
     bool dca;       // exact DCA
     bool adaptive;  // adaptive solves and their bound
     const char *why;
-    bool scaled_only = false;  // only with --length-unit other than 1
-};
-// Known bad for one check only: the exact DCA's joint forces within 10x of the refined ABA's.
-// In millimetres (--length-unit 1000) only: the exact DCA's joint forces 1.9e-13 of the largest
-// (1.5e-16 in metres; unchanged since before 2026-12-05), more than 10x the refined ABA's since
-// its refinement's residual is in double-double (7.0e-17; 4.5e-13 before: docs/math.md 5b, "The
-// residual in double-double"). Its accelerations, and its forces against the textbook ABA, pass.
-const KnownBad kKnownBadDcaForceVsRefined[] = {
-    {"altmass/planar/heavytip2/r=1e+06/n=12/seed=3", true, false, "mm: DCA forces 1.9e-13 vs the refined ABA 7e-17", true},
 };
 // The square-root form (the default; docs/math.md section 4a), measured 2026-12-02. The
 // chains, the point masses (welded, and lone since the rigid join in inertia form), the
@@ -1083,15 +1074,8 @@ const KnownBad *known_bad(const std::string &name) {
         return nullptr;
     }
     for (const KnownBad &k : kKnownBad)
-        if ((!k.scaled_only || g_unit != 1.0) && name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return &k;
+        if (name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return &k;
     return nullptr;
-}
-
-bool known_bad_dca_force_vs_refined(const std::string &name) {
-    if (g_dca_form == AQS_DCA_FORM_PHI) return false;
-    for (const KnownBad &k : kKnownBadDcaForceVsRefined)
-        if ((!k.scaled_only || g_unit != 1.0) && name.compare(0, std::strlen(k.prefix), k.prefix) == 0) return true;
-    return false;
 }
 
 std::string jstr(const std::string &s) {
@@ -1450,10 +1434,11 @@ int main(int argc, char **argv) {
         // yardstick a user has today (2026-12-04: five floating or grounded mixed-mass trees
         // were 12 .. 395x off it, the DCA's back-substitution forces unbalanced, until the
         // exact refinement took the forces of the refined bodies' accelerations where they
-        // do not balance: src/solve/refine.c, state_forces)
+        // do not balance: src/solve/refine.c, state_forces; and in millimetres altmass/planar/
+        // heavytip2/r=1e+06/seed=3 1.9e-13 against 7e-17 until state_forces' residual was in
+        // double-double, 2026-12-05)
         if (check_forces && str == AQS_OK)
-            verdict(st == AQS_OK && dca.force <= kDcaVsAba * std::max(abr.force, kErrFloor),
-                    (kb && kb->dca) || known_bad_dca_force_vs_refined(sp.name),
+            verdict(st == AQS_OK && dca.force <= kDcaVsAba * std::max(abr.force, kErrFloor), kb && kb->dca,
                     sp.name + " DCA constraint forces " + fmt("%.2e", dca.force) + " vs the refined ABA " +
                         fmt("%.2e", abr.force));
         if (json)
