@@ -991,7 +991,7 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  true residual ended far above GMRES's estimate). max_corrections: 0 (off: the DCA's
  *  back-substitution as it is, the paper's exact solver) to
  *  AQS_REFINEMENT_MAX; default AQS_REFINEMENT_MAX. Any phase; takes effect
- *  at the next solve. The refinement's arrays (~1,800 B per joint with the
+ *  at the next solve. The refinement's arrays (~2,300 B per joint with the
  *  nodes' load factors, which node updates keep from then on, and 328 B
  *  for the Krylov basis when GMRES needs it, 2,056 B when a cycle needs more
  *  than 20 steps) are allocated at the first

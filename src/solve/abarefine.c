@@ -187,7 +187,8 @@ static double max_abs(const double *v, int32_t n)
  * from the refined joint accelerations; with R->r their residual, rn its
  * measure, and R->da the correction's accelerations from it), refined on
  * their own against the same residual, a correction kept while it lowers the
- * residual (at most L->refine_max); then the inverse dynamics' forces of
+ * residual (at most L->refine_max), the last where the next would not move
+ * the forces (residual_forces_settled); then the inverse dynamics' forces of
  * them into L->cforce and the bodies' accelerations into the nodes. The
  * joint accelerations are left as they are: the bodies' accelerations carry
  * digits below the joint accelerations' rounding, which the inverse
@@ -199,6 +200,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
     double next, *tmp;
     size_t i;
     int32_t it;
+    int settled;
     for (it = 0; it < L->refine_max; it++) {
         if (it > 0) correction(L, R->r, R->dq, R->da);
         memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
@@ -208,8 +210,10 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
             memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
             break;
         }
+        settled = residual_forces_settled(R->ftry, R->fcur, n6, next / rn);
         tmp = R->fcur, R->fcur = R->ftry, R->ftry = tmp;
         rn = next;
+        if (settled) break; /* the next correction would not move the forces */
     }
     for (i = 0; i < n6; i++) {
         L->aba.node[i / 6].v.s.acc[i % 6] = dd_to_double(R->acc[i]);

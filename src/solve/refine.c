@@ -126,10 +126,6 @@
 /* ... once the bodies' accelerations are refined: the first correction
  * lowered the residual by at least this factor (state_forces). */
 #define STATE_CONTRACT 16.0
-/* ... and stopped where the next correction's move of the forces, predicted
- * as the last one's times the residual's contraction, is below this many u
- * of the largest force (state_forces). */
-#define STATE_FORCE_STOP 0.125
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -139,7 +135,7 @@ struct refine {
     double *q1;     /* nv: the candidate */
     double *q0;     /* nv: the unrefined accelerations */
     double *df;     /* 6 njoints: the correction's joint forces (not used after) */
-    double *acc;    /* 6 ne: the bodies' accelerations before a state correction */
+    double *acc;    /* 6 ne: scratch of the balance (residual_balance) */
     double *v;      /* (kcap + 1) nv: the Krylov basis of M P (orthonormal) */
     double *z;      /* kcap nv: P v_j, the preconditioned directions */
     int32_t kcap;   /* steps the basis holds (KRYLOV_FIRST or KRYLOV_MAX; 0 before it is allocated) */
@@ -200,7 +196,13 @@ static int refine_alloc(aqs_linkage *L)
     R->q0 = lk_calloc_in(L, LK_MEM_DCA, nv, sizeof(double));
     R->df = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->njoints + 1, sizeof(double));
     R->acc = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(double));
-    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->q0 || !R->df || !R->acc) {
+    R->sacc = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(ddouble));
+    R->sacc0 = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(ddouble));
+    R->sfw = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(ddouble));
+    R->fcur = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(double));
+    R->ftry = lk_calloc_in(L, LK_MEM_DCA, 6 * (size_t)L->m.ne + 1, sizeof(double));
+    if (!R->save || !R->r || !R->r2 || !R->dq || !R->q1 || !R->q0 || !R->df || !R->acc || !R->sacc || !R->sacc0 ||
+        !R->sfw || !R->fcur || !R->ftry) {
         refine_free(L);
         return -1;
     }
@@ -238,32 +240,6 @@ static int krylov_alloc(aqs_linkage *L, int32_t steps)
     R->v = v;
     R->z = z;
     R->kcap = steps;
-    return 0;
-}
-
-/* The state correction's double-double arrays, at the first solve whose
- * forces state_forces refines. Returns 0, or -1 when out of memory (the
- * arrays as they were: none). */
-static int state_alloc(aqs_linkage *L)
-{
-    struct refine *R = L->rf;
-    const size_t n6 = 6 * (size_t)L->m.ne + 1;
-    if (R->sacc) return 0;
-    R->sacc = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
-    R->sacc0 = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
-    R->sfw = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(ddouble));
-    R->fcur = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(double));
-    R->ftry = lk_calloc_in(L, LK_MEM_DCA, n6, sizeof(double));
-    if (!R->sacc || !R->sacc0 || !R->sfw || !R->fcur || !R->ftry) {
-        lk_free(L, R->sacc);
-        lk_free(L, R->sacc0);
-        lk_free(L, R->sfw);
-        lk_free(L, R->fcur);
-        lk_free(L, R->ftry);
-        R->sacc = R->sacc0 = R->sfw = NULL;
-        R->fcur = R->ftry = NULL;
-        return -1;
-    }
     return 0;
 }
 
@@ -562,7 +538,7 @@ static double id_force_error(aqs_linkage *L)
  * of a heavy body, was the floor of the forces (a planar chain with 1e6 kg
  * links held by 1 kg ones, in millimetres: 1.9e-13 of the largest force,
  * the double-double state 7.0e-17). After a kept correction it stops where
- * the next one would move the forces by less than STATE_FORCE_STOP u: the
+ * the next one would move the forces by less than u/8 (residual_forces_settled): the
  * residual contracts by 1e-6 .. 1e-7 a correction where the DCA solves it
  * well, so one correction is the rule (a double-double pass is about 13x a
  * double one, docs/bench.md). */
@@ -572,10 +548,10 @@ static int32_t state_forces(aqs_linkage *L)
     aba_state *a = &L->aba;
     const double lim = STATE_BALANCE * 1.1102230246251565e-16, il = L->m.length > 0.0 ? 1.0 / L->m.length : 1.0;
     const size_t n6 = 6 * (size_t)L->m.ne;
-    double rn, fm = 0.0, *tmp, bal, scale, dmax, fmax_;
+    double rn, fm = 0.0, *tmp, bal, scale;
     int32_t kept = 0, it, k;
     size_t i;
-    int converged = 0;
+    int converged = 0, settled;
     for (k = 0; k < L->m.ne; k++) { /* the largest joint force, as residual_balance weighs it */
         const double *c = L->cforce + 6 * (size_t)a->joint[k].joint;
         fm = fmax(fm, (fabs(c[0]) + fabs(c[1]) + fabs(c[2])) * il + fabs(c[3]) + fabs(c[4]) + fabs(c[5]));
@@ -583,7 +559,6 @@ static int32_t state_forces(aqs_linkage *L)
     residual_accelerations(L, L->qdd);
     bal = residual_balance(L, L->cforce, R->acc, &scale); /* at a_c(qdd) */
     if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return 0;
-    if (state_alloc(L) != 0) return 0; /* out of memory: the forces as they are */
     residual_dd_accelerations(L, L->qdd, R->sacc);
     rn = residual_dd_eval(L, R->sacc, R->sfw, R->r, R->fcur);
     if (!isfinite(rn) || !(rn > 0.0)) return 0;
@@ -598,17 +573,12 @@ static int32_t state_forces(aqs_linkage *L)
             break;
         }
         if (it == 0) converged = rn1 * STATE_CONTRACT <= rn;
-        for (i = 0, dmax = fmax_ = 0.0; i < n6; i++) {
-            dmax = fmax(dmax, fabs(R->ftry[i] - R->fcur[i]));
-            fmax_ = fmax(fmax_, fabs(R->ftry[i]));
-        }
+        settled = residual_forces_settled(R->ftry, R->fcur, n6, rn1 / rn);
         tmp = R->r, R->r = R->r2, R->r2 = tmp;
         tmp = R->fcur, R->fcur = R->ftry, R->ftry = tmp;
-        kept++;
-        /* the next correction would move the forces by about this one's move
-         * times the residual's contraction: below the forces' rounding, stop */
-        if (dmax * (rn1 / rn) <= STATE_FORCE_STOP * 1.1102230246251565e-16 * fmax_) break;
         rn = rn1;
+        kept++;
+        if (settled) break;
     }
     if (!converged) return 0;
     for (i = 0; i < n6; i++) a->node[i / 6].v.s.acc[i % 6] = dd_to_double(R->sacc[i]);

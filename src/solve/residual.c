@@ -354,3 +354,14 @@ void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc)
     for (k = 0; k < L->m.ne; k++)
         for (i = 0; i < 6; i++) acc[6 * (size_t)k + i] = dd_add(acc[6 * (size_t)k + i], dd_from(a->node[k].v.s.acc[i]));
 }
+
+int residual_forces_settled(const double *fnew, const double *fold, size_t n, double contraction)
+{
+    double dmax = 0.0, fmx = 0.0;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        dmax = fmax(dmax, fabs(fnew[i] - fold[i]));
+        fmx = fmax(fmx, fabs(fnew[i]));
+    }
+    return dmax * contraction <= RESIDUAL_FORCE_STOP * 1.1102230246251565e-16 * fmx;
+}

@@ -65,5 +65,11 @@ double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, d
  * order), formed in double (a correction's) and added in double-double;
  * overwrites the node values' accelerations (v.s.acc). */
 void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc);
+/* Whether a refinement of the forces can stop: the next correction would
+ * move them by less than RESIDUAL_FORCE_STOP u of the largest, predicted as
+ * the last correction's move (fnew - fold, n entries) times the residual's
+ * contraction (its measure after over before the last correction). */
+#define RESIDUAL_FORCE_STOP 0.125
+int residual_forces_settled(const double *fnew, const double *fold, size_t n, double contraction);
 
 #endif
