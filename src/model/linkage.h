@@ -396,6 +396,8 @@ struct aqs_linkage {
                                  NULL until an articulated-body solve refines */
     struct refine *rf;     /* the exact DCA solve's refinement arrays (src/solve/refine.c); NULL until
                               an exact DCA solve refines */
+    int dd_fma;            /* the double-double passes take the fma product (src/solve/residual.c,
+                              residual_dd_select) */
     char **body_name;     /* body_name_cap entries (NULL = unnamed); NULL until a name is set */
     char **joint_name;
     int32_t body_name_cap, joint_name_cap;

@@ -100,6 +100,7 @@ static struct aba_refine *refine_arrays(aqs_linkage *L)
         aba_refine_free(L);
         return NULL;
     }
+    residual_dd_select(L);
     return R;
 }
 

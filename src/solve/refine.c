@@ -206,6 +206,7 @@ static int refine_alloc(aqs_linkage *L)
         refine_free(L);
         return -1;
     }
+    residual_dd_select(L);
     return 0;
 }
 

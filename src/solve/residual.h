@@ -53,6 +53,10 @@ void residual_forces(const aqs_linkage *L, double *cforce);
  * residual_dd_accelerations: the bodies' accelerations a_c (6 per joint, the
  * ABA order, relative to free fall) of qdd, outward from a_0 = -g. */
 void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble *acc);
+/* Which product the double-double passes take (L->dd_fma): fma's where the
+ * processor has it and AQS_SIMD is not "sse2", else Dekker's (the same
+ * results). Once, before the first pass (with the arrays of a refinement). */
+void residual_dd_select(aqs_linkage *L);
 /* r = Q - S^T f with f_c = I_c a_c - f_ext,c + sum_children X^T f_child
  * formed from acc inward, rounded once: into r (nv) when not NULL; the
  * joint forces rounded into forces (6 per joint, the ABA order) when not
