@@ -806,6 +806,41 @@ static int rounding_fallback_due(const aqs_linkage *L)
     return rounding_fallback_applies(L) && !L->s.all && !(L->s.rounding_rel <= L->rfb_level);
 }
 
+/* The exact solve by the articulated-body algorithm, answered by the exact
+ * DCA (every joint through the DCA's back-substitution, then refined,
+ * whatever the tolerance) where the articulated-body solve cannot give the
+ * digits: its refinement did not contract from its first correction on (its
+ * factors lost them: planar, universal and spherical joints between bodies
+ * 1e9 apart, 0.66 .. 4.7 relative off, where the DCA is 2.4e-16), or on a
+ * linkage with a heavy child its backward pass found an articulated inertia
+ * numerically singular (docs/math.md 5b, "Where the articulated-body solve
+ * cannot refine"). The DCA's storage is allocated at the first such solve;
+ * *path says which solver answered. */
+static aqs_status exact_solve(aqs_linkage *L, const char *fn, int32_t *path)
+{
+    solve_state *s = &L->s;
+    char saved[sizeof L->error];
+    aqs_status st;
+    memcpy(saved, L->error, sizeof saved);
+    st = aba_solve(L);
+    *path = AQS_PATH_EXACT_ABA;
+    if (!(st == AQS_OK && L->aba.lost) && !(st == AQS_ENUMERIC && L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)) return st;
+    {
+        const double eps = s->eps;
+        const int32_t cap = s->max_computed;
+        memcpy(L->error, saved, sizeof saved); /* the ABA's failure is not the call's */
+        if ((st = dca_enable(L, fn)) != AQS_OK || (st = update_coefficients(L)) != AQS_OK) return st;
+        s->eps = 0.0;
+        s->max_computed = 0;
+        adaptive_solve(L);
+        refine_exact(L);
+        s->eps = eps;
+        s->max_computed = cap;
+        *path = AQS_PATH_EXACT_DCA;
+    }
+    return AQS_OK;
+}
+
 static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
 {
     aqs_status st;
@@ -830,12 +865,11 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
     /* the predicted set is for an adaptive solve by the heap only */
     if (by_aba || !adaptive_predict_usable(L)) adaptive_predict_clear(L);
     if (by_aba) {
-        if ((st = aba_solve(L)) != AQS_OK) {
+        if ((st = exact_solve(L, fn, &path)) != AQS_OK) {
             stale_solve_failed(L);
             return st;
         }
-        L->exact_by_aba = 1;
-        path = AQS_PATH_EXACT_ABA;
+        L->exact_by_aba = path == AQS_PATH_EXACT_ABA;
     } else {
         /* allocated already by finalize or by the setters that lead here */
         if ((st = dca_enable(L, fn)) != AQS_OK) return st;
@@ -856,15 +890,14 @@ static aqs_status solve_body(aqs_linkage *L, const char *fn, int stepping)
             const int32_t updated = L->t.nodes_updated, factors = L->t.factors_updated;
             adaptive_predict_clear(L);
             L->rfb_processed = L->s.nprocessed;
-            if ((st = aba_solve(L)) != AQS_OK) {
+            if ((st = exact_solve(L, fn, &path)) != AQS_OK) {
                 stale_solve_failed(L);
                 return st;
             }
             /* the stats count the adaptive solve's work too (aba_solve zeroed them) */
-            L->t.nodes_updated = updated;
-            L->t.factors_updated = factors;
-            L->exact_by_aba = 1;
-            path = AQS_PATH_EXACT_ABA;
+            L->t.nodes_updated += updated;
+            L->t.factors_updated += factors;
+            L->exact_by_aba = path == AQS_PATH_EXACT_ABA;
             L->rfb_last = 1;
             L->rfb_left = AQS_FALLBACK_RUN + 1; /* this one is counted below */
             rfb = 1;

@@ -229,6 +229,7 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
     double step, next, rn;
     int32_t kept = 0, it, i;
     const int unbalanced = balance > ABA_REFINE_LEVEL * RND_U;
+    L->aba.lost = 0;
     if (L->refine_max <= 0 || !(unbalanced || heavy) || !isfinite(balance)) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
@@ -236,7 +237,11 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
     rn = residual_dd_eval(L, R->acc, R->f, R->r, R->fcur);
     correction(L, R->r, R->dq, R->da);
     step = max_abs(R->dq, L->nv);
-    if (!isfinite(step) || !isfinite(rn)) return 0;
+    if (!isfinite(rn)) return 0;
+    if (!isfinite(step)) { /* the factors cannot correct a finite residual */
+        L->aba.lost = 1;
+        return 0;
+    }
     /* a first correction at the rounding level: the solve had the digits
      * the problem has and keeps its joint accelerations; its forces are
      * refined where the balance says they lost digits (R->acc, R->r and
@@ -269,6 +274,12 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
         kept++;
         step = next;
         if (step <= ABA_REFINE_SMALL * RND_U * max_abs(L->qdd, L->nv)) break; /* the next at the rounding level */
+    }
+    if (!(step <= ABA_REFINE_SMALL * RND_U * max_abs(L->qdd, L->nv))) {
+        /* it stopped short of the rounding level (no contraction, or
+         * L->refine_max corrections): the factors do not hold the digits */
+        L->aba.lost = 1;
+        return kept;
     }
     refine_forces(L, R, rn);
     return kept;

@@ -484,6 +484,50 @@ void build_altplanar(Case &c, const std::string &pattern, double ratio, uint64_t
     B.force(prev, 3, -2, 0, 0.9, 0, 0);
 }
 
+// A chain of heavy and light links (pattern: 'H' ratio kg, 'l' 1 kg; inertias 0.05, 0.07,
+// 0.06 m^2 times the mass) whose joints take the kinds of `kinds` in turn ('p' planar, 'u'
+// universal, 's' spherical, 'r' revolute), random joint frames and axes, random positions,
+// gravity off the axes. Planar, universal and spherical joints between bodies 1e9 apart cost
+// the articulated-body solve's factors every digit (0.66 .. 4.7 relative off, or an
+// AQS_ENUMERIC, until its exact solve went to the DCA where its refinement cannot contract,
+// 2026-12-05: docs/math.md 5b, "Where the articulated-body solve cannot refine").
+void build_altjoints(Case &c, const std::string &kinds, const std::string &pattern, double ratio, uint64_t seed) {
+    Builder B(c);
+    Rng r(Rng(seed).next());
+    const int n = (int)pattern.size();
+    int32_t prev = AQS_WORLD;
+    for (int i = 0; i < n; ++i) {
+        const double m = pattern[i] == 'H' ? ratio : 1.0;
+        const double com[3] = {r.uniform(0.2, 0.8), r.uniform(-0.1, 0.1), 0};
+        const int32_t b = B.body(m, com, 0.05 * m, 0.07 * m, 0.06 * m);
+        const char k = kinds[(size_t)i % kinds.size()];
+        const int32_t type = k == 'p' ? AQS_JOINT_PLANAR : k == 'u' ? AQS_JOINT_UNIVERSAL : k == 's' ? AQS_JOINT_SPHERICAL
+                                                                                                      : AQS_JOINT_REVOLUTE;
+        const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        double quat[4], axis[3];
+        random_quat(r, quat);
+        random_unit(r, axis);
+        B.joint(type, prev, b, pos, quat, axis);
+        prev = b;
+    }
+    B.finalize();
+    if (!B.ok()) return;
+    std::vector<double> q;
+    for (int32_t t : B.types) {
+        if (t == AQS_JOINT_SPHERICAL) {
+            double qt[4];
+            random_quat(r, qt);
+            q.insert(q.end(), qt, qt + 4);
+            continue;
+        }
+        const std::vector<int> tr = Builder::translation_slots(t);
+        for (int k = 0; k < Builder::nq_of(t); ++k)
+            q.push_back(std::find(tr.begin(), tr.end(), k) != tr.end() ? r.uniform(-0.3, 0.3) : r.uniform(-M_PI, M_PI));
+    }
+    B.positions(q);
+    B.gravity(0.3, -9.81, 0.2);
+}
+
 // Random tree of n bodies: revolute joints with random axes and frames, parent the previous
 // body with probability 0.7, else a random earlier one; masses 0.5..2 with box inertias. With
 // mass, the masses it draws; with type, each joint's type drawn after its frame and axis.
@@ -806,6 +850,16 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
             // and 2.9e-10 (1e9) until 2026-12-05, later (docs/math.md 5b, "The residual in
             // double-double")
             {"heavytip3", "HllllH"}, {"heavytip4", "HllllllllH"}};
+        // the same with multi-dof joints, 30 links (build_altjoints)
+        for (const char *kinds : {"p", "u", "sr"})
+            for (const char *pat : {"lllH", "Hllll"})
+                for (double ratio : {1e3, 1e6, 1e9})
+                    for (uint64_t seed : {1ull, 2ull}) {
+                        std::string p30;
+                        for (int i = 0; i < 30; ++i) p30 += pat[i % std::strlen(pat)];
+                        add("altmass", std::string("joints/") + kinds + "/" + pat + "/r=" + fmt("%.0e", ratio) + "/n=30/seed=" +
+                                std::to_string(seed), 30, [=](Case &c) { build_altjoints(c, kinds, p30, ratio, seed); });
+                    }
         for (const auto &pt : pats)
             for (double ratio : {1e2, 1e3, 1e6, 1e9})
                 for (uint64_t seed : {1ull, 2ull, 3ull})
