@@ -15,7 +15,15 @@
  *     benign random tree) nothing is refined and the answer is bit for bit
  *     the unrefined one;
  *   - out of memory in the refinement's arrays: the solve succeeds with the
- *     unrefined answer, nothing leaks.
+ *     unrefined answer, nothing leaks;
+ *   - chains of planar (or spherical) joints between bodies 1e9 apart, where
+ *     the articulated-body factors lose every digit (or find an articulated
+ *     inertia singular): the exact solve is the exact DCA's, bit for bit,
+ *     and says so (path AQS_PATH_EXACT_DCA); its first such solve allocates
+ *     the DCA's storage, and out of memory there is AQS_ENOMEM (the accuracy
+ *     against __float128 is hardcases' altmass/joints; the library of
+ *     bf565f1 answered the planar chain here 0.15 off the DCA and the
+ *     spherical one AQS_ENUMERIC).
  * The reference is the refined exact DCA: an independent algorithm, within
  * 1e-15 of the __float128 reference on these models (tests/reference/
  * hardcases.cpp, families armchain and jtypes: 1.4e-16 .. 5.0e-16). */
@@ -294,6 +302,142 @@ static void test_out_of_memory(void **state)
     assert_int_equal(cs.live, 0);
 }
 
+/* A chain of n links whose joints are `type` and `type2` in turn, identity
+ * joint frames, axes drawn from seed, masses ratio kg ('H') and 1 kg ('l')
+ * in `pattern` repeated, inertia diag(0.05, 0.07, 0.06) times the mass,
+ * positions drawn from seed (set_q; else zero), gravity (0.3, -9.81, 0.2);
+ * cs: the counting allocator, or NULL. */
+static aqs_linkage *heavy_chain(counting_state *cs, int32_t type, int32_t type2, const char *pattern, double ratio,
+                                int32_t n, uint64_t seed, int set_q)
+{
+    aqs_linkage *L = test_new_linkage_in(cs);
+    const double quat[4] = {1, 0, 0, 0}, g[3] = {0.3, -9.81, 0.2};
+    const size_t np = strlen(pattern);
+    double q[4 * 40];
+    int32_t i, b, prev = AQS_WORLD, nq;
+    assert_true(n <= 40);
+    for (i = 0; i < n; i++) {
+        const double m = pattern[(size_t)i % np] == 'H' ? ratio : 1.0, com[3] = {0.5, 0.05, 0};
+        const double I[9] = {0.05 * m, 0, 0, 0, 0.07 * m, 0, 0, 0, 0.06 * m}, pos[3] = {i ? 1.0 : 0.0, 0, 0};
+        double axis[3];
+        axis[0] = test_uniform(&seed, -1, 1), axis[1] = test_uniform(&seed, -1, 1), axis[2] = test_uniform(&seed, 0.5, 1);
+        assert_int_equal(aqs_body_add(L, m, com, I, &b), AQS_OK);
+        assert_int_equal(aqs_joint_add(L, i % 2 ? type2 : type, prev, b, pos, quat, axis, NULL), AQS_OK);
+        prev = b;
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, NULL, &nq, NULL), AQS_OK);
+    assert_true(nq <= 4 * 40);
+    if (set_q) {
+        assert_true(type == AQS_JOINT_PLANAR && type2 == AQS_JOINT_PLANAR); /* no quaternions to draw */
+        for (i = 0; i < nq; i++) q[i] = test_uniform(&seed, -1, 1);
+        assert_int_equal(aqs_linkage_set_positions(L, q, (size_t)nq), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(L, 0), AQS_OK);
+    return L;
+}
+
+static int32_t last_path(const aqs_linkage *L)
+{
+    aqs_solve_stats st;
+    memset(&st, 0, sizeof st);
+    st.size = sizeof st;
+    assert_int_equal(aqs_linkage_get_stats(L, &st), AQS_OK);
+    return st.path;
+}
+
+/* The default exact solve of L is the exact DCA's, bit for bit, and its
+ * stats say so; the textbook pass (refinement 0) is more than `off` from it
+ * (the case is as hard as claimed), or fails with AQS_ENUMERIC (off < 0). */
+static void expect_dca_answers(aqs_linkage *L, double off)
+{
+    int32_t nv, nj;
+    double q[120], f[6 * 40], qd[120], fd[6 * 40];
+    aqs_status st;
+    aqs_linkage_get_sizes(L, NULL, &nj, NULL, &nv);
+    assert_true(nv <= 120 && nj <= 40);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+    st = aqs_linkage_solve(L);
+    if (off < 0) {
+        assert_int_equal(st, AQS_OK); /* the ABA's AQS_ENUMERIC is answered by the DCA too */
+        assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+    } else {
+        assert_int_equal(st, AQS_OK);
+        assert_int_equal(last_path(L), AQS_PATH_EXACT_ABA); /* no refinement: no check, no fallback */
+        assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, AQS_REFINEMENT_MAX), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_string_equal(aqs_linkage_last_error(L), ""); /* the ABA's failure is not the call's */
+    assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+    assert_int_equal(aqs_linkage_get_accelerations(L, qd, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, fd, 6 * (size_t)nj), AQS_OK);
+    if (off >= 0) assert_true(test_max_abs_diff(q, qd, (size_t)nv) > off * max_abs(qd, (size_t)nv));
+    assert_int_equal(aqs_linkage_set_exact_solver(L, AQS_EXACT_DCA), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+    assert_int_equal(aqs_linkage_get_constraint_forces(L, f, 6 * (size_t)nj), AQS_OK);
+    assert_memory_equal(q, qd, sizeof(double) * (size_t)nv);
+    assert_memory_equal(f, fd, sizeof(double) * 6 * (size_t)nj);
+}
+
+/* Planar joints between bodies 1e9 apart: the articulated-body factors lose
+ * every digit (the textbook pass more than 1e-3 off), its refinement cannot
+ * contract; the exact solve goes to the DCA. Spherical joints: the
+ * articulated inertia is found singular; the same. */
+static void test_dca_answers(void **state)
+{
+    aqs_linkage *L;
+    (void)state;
+    L = heavy_chain(NULL, AQS_JOINT_PLANAR, AQS_JOINT_PLANAR, "lllH", 1e9, 30, 5, 1);
+    expect_dca_answers(L, 1e-3);
+    aqs_linkage_destroy(L);
+    L = heavy_chain(NULL, AQS_JOINT_SPHERICAL, AQS_JOINT_REVOLUTE, "Hllll", 1e9, 30, 5, 0);
+    expect_dca_answers(L, -1.0);
+    aqs_linkage_destroy(L);
+}
+
+/* Out of memory in the DCA's storage at the first solve that goes to it:
+ * AQS_ENOMEM with a message, nothing leaks; the next solve allocates it. */
+static void test_dca_answers_out_of_memory(void **state)
+{
+    counting_state cs;
+    aqs_linkage *L;
+    long k, tested = 0;
+    (void)state;
+    for (k = 1;; k++) {
+        aqs_status st;
+        memset(&cs, 0, sizeof cs);
+        L = heavy_chain(&cs, AQS_JOINT_PLANAR, AQS_JOINT_PLANAR, "lllH", 1e9, 30, 5, 1);
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* the refinement's arrays, then the DCA's */
+        aqs_linkage_destroy(L);
+        memset(&cs, 0, sizeof cs);
+        L = heavy_chain(&cs, AQS_JOINT_PLANAR, AQS_JOINT_PLANAR, "lllH", 1e9, 30, 5, 1);
+        cs.fail_at = cs.count + k;
+        st = aqs_linkage_solve(L);
+        if (cs.count < cs.fail_at) { /* every allocation of the solve passed */
+            assert_int_equal(st, AQS_OK);
+            aqs_linkage_destroy(L);
+            assert_int_equal(cs.live, 0);
+            break;
+        }
+        if (st != AQS_OK) {
+            assert_int_equal(st, AQS_ENOMEM);
+            test_assert_contains(aqs_linkage_last_error(L), "out of memory");
+            tested++;
+        }
+        cs.fail_at = 0;
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+        aqs_linkage_destroy(L);
+        assert_int_equal(cs.live, 0);
+    }
+    print_message("%ld allocations of the DCA's storage failed in turn\n", tested);
+    assert_true(tested >= 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -302,6 +446,8 @@ int main(void)
         cmocka_unit_test(test_projection),
         cmocka_unit_test(test_benign_unrefined),
         cmocka_unit_test(test_out_of_memory),
+        cmocka_unit_test(test_dca_answers),
+        cmocka_unit_test(test_dca_answers_out_of_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -126,6 +126,14 @@
 /* ... once the bodies' accelerations are refined: the first correction
  * lowered the residual by at least this factor (state_forces). */
 #define STATE_CONTRACT 16.0
+/* ... with at most this many times L->refine_max corrections, each kept while
+ * it lowers the residual, the last where the forces settle
+ * (residual_forces_settled): spherical joints between bodies 1e9 apart
+ * contract 150x a correction, and their forces, 1e-9 of the bodies'
+ * weights, need the residual at 1e-25 of them (six corrections; with
+ * three the forces stayed 2.6e-12 off, the articulated-body solve's
+ * 5.2e-16: hardcases altmass/joints/sr0/lllH/r=1e+09/seed=1). */
+#define STATE_CORRECTIONS 3
 
 struct refine {
     double *save;   /* per node: b and the handle forces (12 nh), then internal nodes' rho and
@@ -563,7 +571,7 @@ static int32_t state_forces(aqs_linkage *L)
     residual_dd_accelerations(L, L->qdd, R->sacc);
     rn = residual_dd_eval(L, R->sacc, R->sfw, R->r, R->fcur);
     if (!isfinite(rn) || !(rn > 0.0)) return 0;
-    for (it = 0; it < L->refine_max && rn > 0.0; it++) {
+    for (it = 0; it < STATE_CORRECTIONS * L->refine_max && rn > 0.0; it++) {
         double rn1;
         if (correction(L, R->r, 0) != 0) break;
         memcpy(R->sacc0, R->sacc, n6 * sizeof(ddouble));

@@ -500,14 +500,15 @@ void build_altjoints(Case &c, const std::string &kinds, const std::string &patte
         const double m = pattern[i] == 'H' ? ratio : 1.0;
         const double com[3] = {r.uniform(0.2, 0.8), r.uniform(-0.1, 0.1), 0};
         const int32_t b = B.body(m, com, 0.05 * m, 0.07 * m, 0.06 * m);
-        const char k = kinds[(size_t)i % kinds.size()];
+        const bool aligned = kinds.back() == '0'; // "...0": every joint frame the identity
+        const char k = kinds[(size_t)i % (kinds.size() - (aligned ? 1 : 0))];
         const int32_t type = k == 'p' ? AQS_JOINT_PLANAR : k == 'u' ? AQS_JOINT_UNIVERSAL : k == 's' ? AQS_JOINT_SPHERICAL
                                                                                                       : AQS_JOINT_REVOLUTE;
         const double pos[3] = {i ? 1.0 : 0.0, 0, 0};
         double quat[4], axis[3];
         random_quat(r, quat);
         random_unit(r, axis);
-        B.joint(type, prev, b, pos, quat, axis);
+        B.joint(type, prev, b, pos, aligned ? kQuat1 : quat, axis);
         prev = b;
     }
     B.finalize();
@@ -851,7 +852,7 @@ std::vector<Spec> make_specs(bool long_mode, int nseeds) {
             // double-double")
             {"heavytip3", "HllllH"}, {"heavytip4", "HllllllllH"}};
         // the same with multi-dof joints, 30 links (build_altjoints)
-        for (const char *kinds : {"p", "u", "sr"})
+        for (const char *kinds : {"p", "u", "sr", "sr0"})
             for (const char *pat : {"lllH", "Hllll"})
                 for (double ratio : {1e3, 1e6, 1e9})
                     for (uint64_t seed : {1ull, 2ull}) {
