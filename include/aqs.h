@@ -446,7 +446,14 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
  *  AQS_EXACT_ABA (default): Featherstone's articulated-body algorithm over
  *  the joints, O(N) with a small constant; it leaves the assembly tree's
  *  coefficients stale (an adaptive solve recomputes them first, once), so an
- *  exact step reports nodes_updated = 0. AQS_EXACT_DCA: the full
+ *  exact step reports nodes_updated = 0. Where its refinement cannot reach
+ *  the rounding level (its factors lost the digits: planar, universal,
+ *  spherical joints between bodies 1e9 apart), or its backward pass finds an
+ *  articulated inertia singular on a linkage where some joint's child is
+ *  more than 1e2 times heavier than its parent, the solve is answered by the exact DCA (refined) and the stats report
+ *  path AQS_PATH_EXACT_DCA; the first such solve allocates the DCA's
+ *  coefficients (AQS_ENOMEM if that fails; docs/math.md 5b, "Where the
+ *  articulated-body solve cannot refine"). AQS_EXACT_DCA: the full
  *  divide-and-conquer back-substitution over the assembly tree, recomputing
  *  the tree after every step (the paper's exact solver; its per-node time is
  *  the benchmarks' reference for the adaptive solve). Both give the same

@@ -1114,7 +1114,10 @@ class Linkage:
         (aqs_linkage_set_exact_solver): "aba" (the default; the
         articulated-body algorithm over the joints, O(N), leaving the assembly
         tree stale until an adaptive solve needs it, so exact steps report
-        nodes_updated = 0) or "dca" (the full DCA back-substitution over the
+        nodes_updated = 0; where its refinement cannot reach the rounding
+        level, or its backward pass finds an articulated inertia singular on
+        a linkage with a heavy child, the exact DCA answers and stats().path
+        says "exact_dca") or "dca" (the full DCA back-substitution over the
         assembly tree, recomputed after every step), or an aqs.EXACT_*
         constant. Same results up to rounding. Any phase."""
         f = "aqs_linkage_set_exact_solver"
