@@ -399,6 +399,39 @@ static void test_dca_answers(void **state)
     aqs_linkage_destroy(L);
 }
 
+/* After a hand-over the next AQS_HANDOVER_RUN exact solves go to the DCA
+ * without the articulated-body attempt (the same answers, bit for bit), then
+ * it is tried again; with refinement 0 (the textbook pass) the run does not
+ * apply. */
+static void test_handover_run(void **state)
+{
+    aqs_linkage *L = heavy_chain(NULL, AQS_JOINT_PLANAR, AQS_JOINT_PLANAR, "lllH", 1e9, 30, 5, 1);
+    double q0[90], q[90];
+    int32_t nv, k;
+    (void)state;
+    aqs_linkage_get_sizes(L, NULL, NULL, NULL, &nv);
+    assert_true(nv <= 90);
+    assert_int_equal(L->aba_skip, 0);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+    assert_int_equal(L->aba_skip, AQS_HANDOVER_RUN);
+    assert_int_equal(aqs_linkage_get_accelerations(L, q0, (size_t)nv), AQS_OK);
+    for (k = AQS_HANDOVER_RUN - 1; k >= 0; k--) {
+        assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+        assert_int_equal(last_path(L), AQS_PATH_EXACT_DCA);
+        assert_int_equal(L->aba_skip, k);
+        assert_int_equal(aqs_linkage_get_accelerations(L, q, (size_t)nv), AQS_OK);
+        assert_memory_equal(q, q0, sizeof(double) * (size_t)nv);
+    }
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK); /* tried again: hands over again */
+    assert_int_equal(L->aba_skip, AQS_HANDOVER_RUN);
+    assert_int_equal(aqs_linkage_set_exact_refinement(L, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(last_path(L), AQS_PATH_EXACT_ABA);
+    assert_int_equal(L->aba_skip, AQS_HANDOVER_RUN);
+    aqs_linkage_destroy(L);
+}
+
 /* Out of memory in the DCA's storage at the first solve that goes to it:
  * AQS_ENOMEM with a message, nothing leaks; the next solve allocates it. */
 static void test_dca_answers_out_of_memory(void **state)
@@ -448,6 +481,7 @@ int main(void)
         cmocka_unit_test(test_out_of_memory),
         cmocka_unit_test(test_dca_answers),
         cmocka_unit_test(test_dca_answers_out_of_memory),
+        cmocka_unit_test(test_handover_run),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

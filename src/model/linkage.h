@@ -9,6 +9,9 @@
  * level is lowered (AQS_HEAVY_CHILD, docs/math.md 13c) */
 #define AQS_HEAVY_CHILD 1e3
 #define AQS_HEAVY_CHILD_ABA 1e2
+/* After an articulated-body solve handed over to the exact DCA, this many exact
+ * solves go to the DCA directly (src/api/api.c, exact_solve) */
+#define AQS_HANDOVER_RUN 16
 
 #include <stddef.h>
 #include <stdint.h>
@@ -381,6 +384,9 @@ struct aqs_linkage {
                               (src/solve/refine.c, FORCES); 0 only in tests, for GMRES alone */
     int32_t dca_form;     /* AQS_DCA_FORM_* (set before finalize) */
     int exact_by_aba;     /* the last solve was exact by the articulated-body algorithm */
+    int32_t aba_skip;     /* exact solves left that go to the DCA without trying the articulated-body
+                             solve, after one handed over (src/api/api.c, exact_solve; set to
+                             AQS_HANDOVER_RUN) */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */
