@@ -809,9 +809,10 @@ static int rounding_fallback_due(const aqs_linkage *L)
 /* The exact solve by the articulated-body algorithm, answered by the exact
  * DCA (every joint through the DCA's back-substitution, then refined,
  * whatever the tolerance) where the articulated-body solve cannot give the
- * digits: its refinement did not contract from its first correction on (its
- * factors lost them: planar, universal and spherical joints between bodies
- * 1e9 apart, 0.66 .. 4.7 relative off, where the DCA is 2.4e-16), or on a
+ * digits: its refinement stopped short of the rounding level (no
+ * contraction, or max_corrections used up: its factors lost them, as on
+ * planar, universal and spherical joints between bodies 1e9 apart, up to
+ * 4.1 relative off, where the DCA is 2.2e-16 .. 5.6e-9), or on a
  * linkage with a heavy child its backward pass found an articulated inertia
  * numerically singular (docs/math.md 5b, "Where the articulated-body solve
  * cannot refine"). The DCA's storage is allocated at the first such solve;

@@ -303,8 +303,8 @@ typedef struct {
     int world_valid;  /* node[].v.world holds the world poses (update_loads reads them) */
     int x_valid;      /* inside aba_solve after its pose sweep: world poses by walking up
                          (kin_comp_world_walk) rather than refreshing stale tree poses */
-    int lost;         /* the last solve's refinement could not contract from its first
-                         correction on: its factors do not hold the digits (abarefine.c) */
+    int lost;         /* the last solve's refinement stopped short of the rounding level: its
+                         factors do not hold the digits (abarefine.c) */
 } aba_state;
 
 /* The automatic choice between the adaptive and the exact path (src/solve/autopath.c). */

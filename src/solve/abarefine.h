@@ -38,9 +38,10 @@
  * child's balanced solve whose first correction is at the rounding level
  * keeps its answer and forces. Returns the corrections of the joint
  * accelerations kept. Out of memory: 0, the answer as it was. Where the
- * first correction is not finite, or the one after it is not at most
- * ABA_REFINE_RATE of it, the factors do not hold the digits: L->aba.lost is
- * set (else cleared), the answer left unrefined, and the caller answers by
+ * first correction is not finite, or the refinement stops short of the
+ * rounding level (a correction that does not contract, or L->refine_max of
+ * them used up), the factors do not hold the digits: L->aba.lost is set
+ * (else cleared), the forces are left unrefined, and the caller answers by
  * the exact DCA (src/api/api.c, exact_solve). */
 int32_t aba_refine(aqs_linkage *L, double balance, int heavy);
 /* Release the refinement's arrays (at destroy and when the model changes). */

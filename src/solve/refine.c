@@ -550,7 +550,7 @@ static double id_force_error(aqs_linkage *L)
  * the next one would move the forces by less than u/8 (residual_forces_settled): the
  * residual contracts by 1e-6 .. 1e-7 a correction where the DCA solves it
  * well, so one correction is the rule (a double-double pass is about 13x a
- * double one, docs/bench.md). */
+ * double one with Dekker's product, docs/bench.md). */
 static int32_t state_forces(aqs_linkage *L)
 {
     struct refine *R = L->rf;

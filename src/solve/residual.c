@@ -125,21 +125,6 @@ void residual_accelerations(aqs_linkage *L, const double *qdd)
     outward(L, qdd, 0);
 }
 
-double residual_eval_acc(aqs_linkage *L, double *r)
-{
-    return inward(L, r, 0);
-}
-
-void residual_acc_add(aqs_linkage *L, const double *dq, double *save)
-{
-    aba_state *a = &L->aba;
-    int32_t k, i;
-    for (k = 0; k < L->m.ne; k++) memcpy(save + 6 * (size_t)k, a->node[k].v.s.acc, 6 * sizeof(double));
-    outward(L, dq, 1);
-    for (k = 0; k < L->m.ne; k++)
-        for (i = 0; i < 6; i++) a->node[k].v.s.acc[i] += save[6 * (size_t)k + i];
-}
-
 double residual_balance(aqs_linkage *L, const double *cforce, double *work, double *scale)
 {
     const model *m = &L->m;
@@ -191,13 +176,6 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     }
     *scale = tmax;
     return bad ? NAN : bmax;
-}
-
-void residual_acc_restore(aqs_linkage *L, const double *save)
-{
-    aba_state *a = &L->aba;
-    int32_t k;
-    for (k = 0; k < L->m.ne; k++) memcpy(a->node[k].v.s.acc, save + 6 * (size_t)k, 6 * sizeof(double));
 }
 
 double residual_eval(aqs_linkage *L, const double *qdd, double *r)

@@ -22,13 +22,6 @@ double residual_eval(aqs_linkage *L, const double *qdd, double *r);
 /* The bodies' accelerations a_c of qdd (relative to free fall) into the
  * node values (v.s.acc): residual_eval's outward pass alone. */
 void residual_accelerations(aqs_linkage *L, const double *qdd);
-/* The same residual from the node values' accelerations a_c (v.s.acc) as
- * they are (the inward pass alone): forces into v.s.U. */
-double residual_eval_acc(aqs_linkage *L, double *r);
-/* a_c += the accelerations of dq from rest (save: 6 ne scratch, the old a_c
- * after); residual_acc_restore puts save back. */
-void residual_acc_add(aqs_linkage *L, const double *dq, double *save);
-void residual_acc_restore(aqs_linkage *L, const double *save);
 /* The bodies' balance of forces with the joint forces cforce at the node
  * values' accelerations a_c: max over bodies of |f_c - sum_children X^T
  * f_child - (I_c a_c - f_ext,c)|_1 (torques weighed by 1/l), NaN if one is
