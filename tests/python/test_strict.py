@@ -148,8 +148,10 @@ def test_python_ints_beyond_64_bits_are_numbers(L):
 
 @pytest.mark.parametrize("values", [("0", "0", "0"), "0 0 0", np.zeros(3, dtype=bool),
                                     np.zeros(3, dtype=complex), [0, None, 0],
-                                    np.array([0, 0, 0], dtype=object) + 0.5j],
-                         ids=["strings", "string", "bools", "complex", "None", "objects"])
+                                    np.array([0, 0, 0], dtype=object) + 0.5j,
+                                    [0, 0, True], (0.0, -9.81, np.bool_(False)), [[0, True, 0]]],
+                         ids=["strings", "string", "bools", "complex", "None", "objects",
+                              "bool-among-ints", "numpy-bool-among-floats", "nested-bool"])
 def test_arrays_of_non_numbers_are_type_errors(L, values):
     with pytest.raises(TypeError, match="aqs_linkage_set_gravity: gravity"):
         L.set_gravity(values)

@@ -253,6 +253,7 @@ def status_string(status):
 
 _REAL_KINDS = "iuf"  # numpy dtype kinds taken as real numbers: signed, unsigned, float
 _BOOLS = (bool, np.bool_)
+_BOOL_TYPES = frozenset(_BOOLS)
 
 
 def _shape_text(shape):
@@ -262,6 +263,20 @@ def _shape_text(shape):
 
 def _shape_fits(shape, pattern):
     return len(shape) == len(pattern) and all(p < 0 or p == d for d, p in zip(shape, pattern))
+
+
+def _holds_bool(values, ndim):
+    """True when (nested) sequences, which numpy made an ndim-dimensional
+    array, hold a bool among their numbers: numpy takes it as 0 or 1
+    (np.asarray([0, 0, True]) is an int array)."""
+    if ndim == 1 and isinstance(values, (list, tuple)):
+        flat = values  # a flat sequence (the common case): scanned as it is
+    else:
+        try:
+            flat = np.asarray(values, dtype=object).flat
+        except (TypeError, ValueError):
+            return False
+    return not _BOOL_TYPES.isdisjoint(map(type, flat))  # (set.isdisjoint, map: loops in C)
 
 
 def _array(values, function, name, shapes=((-1,),)):
@@ -297,6 +312,9 @@ def _array(values, function, name, shapes=((-1,),)):
     if array.dtype.kind not in _REAL_KINDS:
         raise TypeError("%s: %s must be an array of real numbers (int or float), got dtype %s"
                         % (function, name, array.dtype))
+    if not isinstance(values, np.ndarray) and _holds_bool(values, array.ndim):
+        raise TypeError("%s: %s must be an array of real numbers (int or float), got a bool in it"
+                        % (function, name))
     if not any(_shape_fits(array.shape, shape) for shape in shapes):
         raise SizeError("%s: %s has shape %s, expected %s"
                         % (function, name, _shape_text(array.shape),
