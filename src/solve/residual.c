@@ -31,6 +31,10 @@
 
 #include "kintree.h"
 
+/* The larger of a (never NaN) and b, a NaN b dropped as fmax drops it: the
+ * same value as fmax(a, b) without its library call (these run per joint). */
+static inline double max_of(double a, double b) { return b > a ? b : a; }
+
 void residual_poses(aqs_linkage *L)
 {
     aba_state *a = &L->aba;
@@ -162,9 +166,9 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
             bn += fabs(g[i]) * w;
             tn += h[i] * w;
         }
-        bmax = fmax(bmax, bn);
-        tmax = fmax(tmax, tn);
-        bad |= !(bn == bn); /* fmax drops a NaN */
+        bmax = max_of(bmax, bn);
+        tmax = max_of(tmax, tn);
+        bad |= !(bn == bn); /* max_of drops a NaN */
         if (jt->parent >= 0) {
             double *gp = a->node[jt->parent].v.s.U, *hp = work + 6 * (size_t)jt->parent;
             spatial_xform_force_back(&a->node[k].X, f, t);
@@ -263,8 +267,8 @@ int residual_forces_settled(const double *fnew, const double *fold, size_t n, do
     double dmax = 0.0, fmx = 0.0;
     size_t i;
     for (i = 0; i < n; i++) {
-        dmax = fmax(dmax, fabs(fnew[i] - fold[i]));
-        fmx = fmax(fmx, fabs(fnew[i]));
+        dmax = max_of(dmax, fabs(fnew[i] - fold[i]));
+        fmx = max_of(fmx, fabs(fnew[i]));
     }
     return dmax * contraction <= RESIDUAL_FORCE_STOP * 1.1102230246251565e-16 * fmx;
 }

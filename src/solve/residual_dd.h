@@ -127,13 +127,13 @@ static DD_TARGET double DD_FN(dd_eval)(const aqs_linkage *L, const ddouble *acc,
                 if (!(v <= e)) e = v; /* NaN too */
             }
         }
-        rmax = fmax(rmax, e);
-        bad |= !(e == e); /* fmax drops a NaN */
-        smax = fmax(smax, (fabs(fl[0]) + fabs(fl[1]) + fabs(fl[2])) * il + fabs(fl[3]) + fabs(fl[4]) + fabs(fl[5]));
+        rmax = max_of(rmax, e);
+        bad |= !(e == e); /* max_of drops a NaN */
+        smax = max_of(smax, (fabs(fl[0]) + fabs(fl[1]) + fabs(fl[2])) * il + fabs(fl[3]) + fabs(fl[4]) + fabs(fl[5]));
         if (forces) memcpy(forces + 6 * (size_t)k, fl, sizeof fl);
         if (jt->parent >= 0) DD_FN(dd_force_to_parent_add)(&a->node[k].X, f, fw + 6 * (size_t)jt->parent);
     }
-    smax = fmax(smax, tsum);
+    smax = max_of(smax, tsum);
     if (bad || !isfinite(smax)) return NAN;
     return smax > 0.0 ? rmax / smax : (rmax > 0.0 ? INFINITY : 0.0);
 }
