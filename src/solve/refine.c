@@ -539,7 +539,10 @@ static double id_force_error(aqs_linkage *L)
  * residual stopped decreasing (not converged: not kept). Returns the
  * corrections kept when their forces are taken (L->cforce refined), -1 when
  * the back-substitution's forces balance at the refined a_c, 0 when it did
- * not run or its a_c is not trusted (L->cforce as it was in both). Between
+ * not run or its a_c is not trusted (L->cforce as it was in both). *bs_err:
+ * the back-substitution's forces' balance at the a_c of the refined joint
+ * accelerations over the largest joint force (their error, relative, as far
+ * as the balance tells it), INFINITY where it was not formed. Between
  * save_loads(L, 0) and (L, 1).
  * The state and its residual are in double-double (src/solve/residual.c,
  * residual_dd_*, as the articulated-body refinement has them), the
@@ -551,7 +554,7 @@ static double id_force_error(aqs_linkage *L)
  * residual contracts by 1e-6 .. 1e-7 a correction where the DCA solves it
  * well, so one correction is the rule (a double-double pass is about 13x a
  * double one with Dekker's product, docs/bench.md). */
-static int32_t state_forces(aqs_linkage *L)
+static int32_t state_forces(aqs_linkage *L, double *bs_err)
 {
     struct refine *R = L->rf;
     aba_state *a = &L->aba;
@@ -567,6 +570,7 @@ static int32_t state_forces(aqs_linkage *L)
     }
     residual_accelerations(L, L->qdd);
     bal = residual_balance(L, L->cforce, R->acc, &scale); /* at a_c(qdd) */
+    *bs_err = fm > 0.0 && bal == bal ? bal / fm : INFINITY;
     if (!(bal > lim * fmin(scale, STATE_FORCE_SCALE * fm))) return 0;
     residual_dd_accelerations(L, L->qdd, R->sacc);
     rn = residual_dd_eval(L, R->sacc, R->sfw, R->r, R->fcur);
@@ -603,6 +607,7 @@ void refine_exact(aqs_linkage *L)
     struct refine *R;
     double rn, *tmp, rfloor = -1.0;
     int32_t cycle, nv = L->nv, kept = 0, akept = 0, skept = 0, i;
+    double bs_err = INFINITY;
     int done = 0, frefined = 0;
     L->s.refined = 0;
     if (L->t.nnodes == 0 || L->m.ne == 0 || L->refine_max <= 0) return;
@@ -655,14 +660,18 @@ void refine_exact(aqs_linkage *L)
         kept += k;
         if (rn == 0.0) break;
     }
-    if (kept) skept = state_forces(L);
+    if (kept) skept = state_forces(L, &bs_err);
     save_loads(L, 1);
     if (kept && skept == 0) {
         /* the inverse dynamics' joint forces of the refined accelerations
          * where their estimated error is at the rounding level, or below the
-         * unrefined forces' (estimated by how far the accelerations moved)
-         * when those were not refined, and in the inverse-inertia form
-         * (FORCES above) */
+         * unrefined forces' when those were not refined (estimated by how
+         * far the accelerations moved, and by how well those forces balance
+         * the bodies at the refined accelerations: an alternating chain of
+         * 1 and 1e9 kg under gravity out of its plane, whose accelerations
+         * moved by 3.3e-9, kept forces 5.0e-15 off that balance to 7.6e-15,
+         * where the inverse dynamics' are 9.0e-13 off), and in the
+         * inverse-inertia form (FORCES above) */
         int use_id = L->dca_form != AQS_DCA_FORM_SQRT;
         if (!use_id) {
             const double e_id = id_force_error(L);
@@ -671,7 +680,8 @@ void refine_exact(aqs_linkage *L)
                 d = fmax(d, fabs(L->qdd[i] - R->q0[i]));
                 m = fmax(m, fabs(L->qdd[i]));
             }
-            use_id = e_id <= ID_FORCE_LEVEL * 1.1102230246251565e-16 || (!frefined && e_id <= (m > 0.0 ? d / m : 0.0));
+            use_id = e_id <= ID_FORCE_LEVEL * 1.1102230246251565e-16 ||
+                     (!frefined && e_id <= (m > 0.0 ? d / m : 0.0) && e_id < bs_err);
         }
         if (use_id) {
             (void)residual_eval(L, L->qdd, R->r2);
