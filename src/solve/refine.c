@@ -602,6 +602,23 @@ static int32_t state_forces(aqs_linkage *L, double *bs_err)
     return kept;
 }
 
+/* GMRES's true residual: residual_eval's, or on a linkage with a heavy child
+ * (model.heavy_ratio above AQS_HEAVY_CHILD_ABA) the same r formed in
+ * double-double and rounded once (src/solve/residual.c, residual_dd_*; the
+ * articulated-body refinement's): in double its floor, u times a heavy body's
+ * terms, hides a light link's error. Returns ||r||_2. */
+static double true_residual(aqs_linkage *L, const double *q, double *r)
+{
+    struct refine *R = L->rf;
+    double s = 0.0;
+    int32_t i;
+    if (!(L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)) return residual_eval(L, q, r);
+    residual_dd_accelerations(L, q, R->sacc);
+    if (!isfinite(residual_dd_eval(L, R->sacc, R->sfw, r, NULL))) return NAN;
+    for (i = 0; i < L->nv; i++) s += r[i] * r[i];
+    return sqrt(s);
+}
+
 void refine_exact(aqs_linkage *L)
 {
     struct refine *R;
@@ -632,7 +649,7 @@ void refine_exact(aqs_linkage *L)
     }
     L->s.refined = akept;
     residual_poses(L);
-    rn = residual_eval(L, L->qdd, R->r);
+    rn = true_residual(L, L->qdd, R->r);
     if (!isfinite(rn) || rn == 0.0) return;
     save_loads(L, 0);
     for (cycle = 0; cycle < L->refine_max && !done; cycle++) {
@@ -640,7 +657,7 @@ void refine_exact(aqs_linkage *L)
         int at_floor = 0;
         const int32_t k = gmres_cycle(L, rn, cycle, &done, &est, &sum);
         if (k == 0) break;
-        rn1 = residual_eval(L, R->q1, R->r2); /* the true residual */
+        rn1 = true_residual(L, R->q1, R->r2); /* the true residual */
         if (!isfinite(rn1)) break; /* a non-finite candidate's residual is not finite */
         if (k > 1 && done && !(rn1 < rn) && est <= LATER_DROP * rn) {
             /* a converged Krylov cycle that did not lower the residual: kept
