@@ -446,6 +446,7 @@ check-fuzz: | $(BUILD_PREREQ)
 	    $(MAKE) --no-print-directory $(FUZZ) build/fuzz/test_stale_ubsan && \
 	    echo "== build/fuzz/test_stale_ubsan" && build/fuzz/test_stale_ubsan && \
 	    echo "== $(FUZZ) -runs=$(FUZZ_RUNS) -seed=1 (log: build/fuzz/check.log)" && \
-	    if (cd build/fuzz && ./aqs_fuzz -runs=$(FUZZ_RUNS) -seed=1 -max_len=1024 \
-	            -print_final_stats=1 > check.log 2>&1); then grep -a '^Done\|^stat::' build/fuzz/check.log; \
+	    if (cd build/fuzz && rm -rf check-corpus && mkdir check-corpus && \
+	        ./aqs_fuzz -runs=$(FUZZ_RUNS) -seed=1 -max_len=1024 -print_final_stats=1 \
+	            check-corpus $(abspath tests/fuzz/seeds) > check.log 2>&1); then grep -a '^Done\|^stat::' build/fuzz/check.log; \
 	    else tail -n 60 build/fuzz/check.log; echo "check-fuzz: FAILED (reproducer crash-* in build/fuzz)"; exit 1; fi; fi
