@@ -453,8 +453,9 @@ AQS_API aqs_status aqs_linkage_step(aqs_linkage *linkage, double dt);
  *  more than 1e2 times heavier than its parent, the solve is answered by the exact DCA (refined) and the stats report
  *  path AQS_PATH_EXACT_DCA (so are the next 16 exact solves, directly);
  *  the first such solve allocates the DCA's coefficients (AQS_ENOMEM if
- *  that fails; docs/math.md 5b, "Where the articulated-body solve cannot
- *  refine"). AQS_EXACT_DCA: the full
+ *  that fails, and then, as after AQS_ENUMERIC, the previous results are
+ *  no longer readable: the attempt overwrote them; docs/math.md 5b, "Where
+ *  the articulated-body solve cannot refine"). AQS_EXACT_DCA: the full
  *  divide-and-conquer back-substitution over the assembly tree, recomputing
  *  the tree after every step (the paper's exact solver; its per-node time is
  *  the benchmarks' reference for the adaptive solve). Both give the same
