@@ -516,9 +516,10 @@ void build_altplanar(Case &c, const std::string &pattern, double ratio, uint64_t
 // links in the repeated pattern, centres of mass (0.5, 0.05, 0) m, inertias 0.05, 0.07, 0.06 m^2
 // times the mass, q uniform in (-0.3, 0.3), gravity (0.3, -9.81, 0.2): out of its plane the
 // chain is rigid and the light links carry the heavy ones' weight as constraint forces. The
-// exact DCA's forces were 3e-13 .. 2.5e-12 of the largest (up to 2,800x the ABA's) until
-// 2026-12-05 (session 16): its refinement replaced back-substitution forces that balanced the
-// bodies by inverse-dynamics ones in double (src/solve/refine.c, refine_exact).
+// exact DCA's forces were 6.1e-14 .. 1.0e-12 of the largest on 4 of the 24 quick cases (up to
+// 1,300x the ABA's) until 2026-12-05 (session 16): its refinement replaced back-substitution
+// forces that balanced the bodies by inverse-dynamics ones in double (src/solve/refine.c,
+// refine_exact).
 void build_altoutplane(Case &c, const std::string &pattern, int n, double ratio, uint64_t seed) {
     Builder B(c);
     Rng r(Rng(seed + 100).next());
