@@ -65,7 +65,7 @@ typedef int32_t aqs_status;
 #define AQS_EINVAL (-1) /**< an argument is invalid (NULL, non-finite, out of its domain) */
 #define AQS_ERANGE (-2) /**< a body or joint index is out of range */
 #define AQS_ESTATE (-3) /**< wrong phase: e.g. adding after finalize, solving before */
-#define AQS_ENOMEM (-4) /**< an allocation failed; the linkage is unchanged */
+#define AQS_ENOMEM (-4) /**< an allocation failed; the linkage is unchanged (a solve's hand-over to the exact DCA also discards the previous results: AQS_EXACT_ABA) */
 #define AQS_EMODEL (-5) /**< finalize found the linkage invalid (topology, mass) */
 #define AQS_ENUMERIC (-6) /**< a numerical failure (singular articulated inertia) */
 #define AQS_ESIZE (-7)  /**< a caller's array is too small, or not the exact size asked; nothing was written */

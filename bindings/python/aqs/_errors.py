@@ -44,7 +44,8 @@ class StateError(Error, RuntimeError):
 
 
 class OutOfMemoryError(Error, builtins.MemoryError):
-    """AQS_ENOMEM: an allocation failed; the linkage is unchanged."""
+    """AQS_ENOMEM: an allocation failed; the linkage is unchanged (a solve's hand-over to
+    the exact DCA also discards the previous results: docs/api.md, "Memory")."""
 
     status = _lib.ENOMEM
 
