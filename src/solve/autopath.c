@@ -139,6 +139,19 @@ int autopath_decide(aqs_linkage *L, int stepping)
  * found by octaves of tau. Nodes on the way to a free joint are processed
  * always (A taken as infinite). */
 #define OCTAVES 200
+/* floor(log2(root / a)) clamped to 0 .. OCTAVES - 1, the last where a or
+ * root is 0 or the ratio is beyond double's range (an infinite or NaN
+ * octave converted to int is undefined behaviour: found by the fuzzer,
+ * tests/fuzz/seeds/autopath-octave-inf) */
+static int octave(double root, double a)
+{
+    double x;
+    if (!(a > 0.0) || !(root > 0.0)) return OCTAVES - 1;
+    x = floor(log2(root / a));
+    if (!(x < OCTAVES - 1)) return OCTAVES - 1;
+    return x > 0.0 ? (int)x : 0;
+}
+
 static void estimate_from_exact(aqs_linkage *L)
 {
     const tree *t = &L->t;
@@ -190,9 +203,7 @@ static void estimate_from_exact(aqs_linkage *L)
                 continue;
             }
             /* octave of A: tau_k >= A for k <= kn ... node n is above tau_k for k > kn */
-            kn = A[n] > 0.0 && root > 0.0 ? (int)floor(log2(root / A[n])) : OCTAVES;
-            if (kn < 0) kn = 0;
-            if (kn > OCTAVES - 1) kn = OCTAVES - 1;
+            kn = octave(root, A[n]);
             count[kn + 1] += 1.0; /* processed once tau_k < A: k > kn */
             /* queued while its parent is processed and it is not: k in (kp, kn] */
             if (nd->parent < 0) {
@@ -200,10 +211,7 @@ static void estimate_from_exact(aqs_linkage *L)
             } else if (t->nodes[nd->parent].forced) {
                 kp = -1;
             } else {
-                double ap = A[nd->parent];
-                kp = ap > 0.0 && root > 0.0 ? (int)floor(log2(root / ap)) : OCTAVES;
-                if (kp < 0) kp = 0;
-                if (kp > OCTAVES - 1) kp = OCTAVES - 1;
+                kp = octave(root, A[nd->parent]);
             }
             if (kp < kn) {
                 frontier[kp + 1] += A[n];
