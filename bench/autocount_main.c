@@ -3,17 +3,20 @@
  * path"):
  *
  *   valgrind --tool=callgrind --toggle-collect=bench_counted_steps \
- *       build/bench/autocount_main MODE JOINTS FORCES STEPS [FORM]
+ *       build/bench/autocount_main MODE JOINTS FORCES STEPS [FORM [HEAVY]]
  *
  * MODE: auto (a tolerance, the automatic path on: the library's default),
- * adaptive (a tolerance, the automatic path off) or exact (eps = 0, the
- * articulated-body algorithm). The molecule of JOINTS joints, FORCES forces
+ * adaptive (a tolerance, the automatic path off), exact (eps = 0, the
+ * articulated-body algorithm) or exactdca (eps = 0, AQS_EXACT_DCA). The
+ * molecule of JOINTS joints (HEAVY: bench_build_molecule_heavy's factor,
+ * default 1: the plain molecule), FORCES forces
  * drawn as aqs-bench draws them (seed 1: the first FORCES distinct bodies of
  * one bench_rng sequence, 1 N at the centre of mass in a random direction),
  * rel_joint 2^-19, gravity off; dt as aqs-bench's (the fastest joint of the
  * exact first solve moves 1e-3 rad). One untimed solve (the full update after
  * setting the loads), then STEPS steps inside bench_counted_steps, the only
- * function callgrind counts. Prints the paths taken and the mean N_E. FORM:
+ * function callgrind counts. Prints the paths taken, the mean N_E and the
+ * automatic path's costs of the last step (0 where it did not choose). FORM:
  * sqrt (the default) or phi, aqs_linkage_set_dca_form. */
 #include <math.h>
 #include <stdio.h>
@@ -48,25 +51,30 @@ int main(int argc, char **argv)
     aqs_linkage *L = NULL;
     int32_t joints, nf, steps, nv, k, i, exact_steps;
     const char *mode, *form = argc > 5 ? argv[5] : "sqrt";
+    const double heavy = argc > 6 ? atof(argv[6]) : 1.0;
     double *qdd, amax = 0.0, dt, mean_ne;
+    aqs_solve_stats last;
     bench_rng rng;
     unsigned char *used;
-    if (argc != 5 && argc != 6) {
-        fprintf(stderr, "usage: autocount_main auto|adaptive|exact JOINTS FORCES STEPS [sqrt|phi]\n");
+    if (argc < 5 || argc > 7) {
+        fprintf(stderr, "usage: autocount_main auto|adaptive|exact|exactdca JOINTS FORCES STEPS [sqrt|phi [HEAVY]]\n");
         return 2;
     }
     mode = argv[1];
     joints = atoi(argv[2]);
     nf = atoi(argv[3]);
     steps = atoi(argv[4]);
-    if ((strcmp(mode, "auto") && strcmp(mode, "adaptive") && strcmp(mode, "exact")) || joints < 1 ||
-        nf < 1 || nf > joints || steps < 1 || (strcmp(form, "sqrt") && strcmp(form, "phi"))) {
+    if ((strcmp(mode, "auto") && strcmp(mode, "adaptive") && strcmp(mode, "exact") && strcmp(mode, "exactdca")) ||
+        joints < 1 || nf < 1 || nf > joints || steps < 1 || (strcmp(form, "sqrt") && strcmp(form, "phi")) ||
+        !(heavy > 0.0)) {
         fprintf(stderr, "autocount_main: bad arguments\n");
         return 2;
     }
     if (aqs_linkage_create(&L) != AQS_OK ||
         aqs_linkage_set_dca_form(L, strcmp(form, "phi") ? AQS_DCA_FORM_SQRT : AQS_DCA_FORM_PHI) != AQS_OK ||
-        bench_build_molecule(L, joints, BENCH_MOLECULE_SEED) != AQS_OK || aqs_linkage_finalize(L) != AQS_OK) {
+        bench_build_molecule_heavy(L, joints, BENCH_MOLECULE_SEED, heavy) != AQS_OK ||
+        aqs_linkage_set_exact_solver(L, strcmp(mode, "exactdca") ? AQS_EXACT_ABA : AQS_EXACT_DCA) != AQS_OK ||
+        aqs_linkage_finalize(L) != AQS_OK) {
         fprintf(stderr, "autocount_main: building: %s\n", L ? aqs_linkage_last_error(L) : "");
         return 1;
     }
@@ -91,7 +99,7 @@ int main(int argc, char **argv)
     for (i = 0; i < nv; i++) amax = fabs(qdd[i]) > amax ? fabs(qdd[i]) : amax;
     free(qdd);
     dt = sqrt(1e-3 / amax);
-    if (strcmp(mode, "exact") != 0) {
+    if (strcmp(mode, "exact") != 0 && strcmp(mode, "exactdca") != 0) {
         if (aqs_linkage_set_auto(L, strcmp(mode, "auto") == 0) != AQS_OK ||
             aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)) != AQS_OK ||
             aqs_linkage_solve(L) != AQS_OK)
@@ -101,9 +109,12 @@ int main(int argc, char **argv)
         fprintf(stderr, "autocount_main: %s\n", aqs_linkage_last_error(L));
         return 1;
     }
-    printf("{\"mode\":\"%s\",\"form\":\"%s\",\"joints\":%d,\"forces\":%d,\"steps\":%d,\"exact_steps\":%d,"
-           "\"mean_ne\":%.1f}\n",
-           mode, form, (int)joints, (int)nf, (int)steps, exact_steps, mean_ne);
+    last.size = sizeof last;
+    if (aqs_linkage_get_stats(L, &last) != AQS_OK) return 1;
+    printf("{\"mode\":\"%s\",\"form\":\"%s\",\"heavy\":%g,\"joints\":%d,\"forces\":%d,\"steps\":%d,"
+           "\"exact_steps\":%d,\"mean_ne\":%.1f,\"cost_adaptive\":%.4g,\"cost_exact\":%.4g}\n",
+           mode, form, heavy, (int)joints, (int)nf, (int)steps, exact_steps, mean_ne, last.cost_adaptive,
+           last.cost_exact);
     aqs_linkage_destroy(L);
     return 0;
 }

@@ -314,6 +314,8 @@ typedef struct molecule_builder {
     aqs_linkage *linkage;
     bench_rng *rng;
     int32_t *parents; /* may be NULL */
+    double heavy;     /* the mass factor of every BENCH_MOLECULE_HEAVY_EVERY-th terminal atom */
+    int32_t terminals; /* terminal atoms added so far */
 } molecule_builder;
 
 /* Add one atom bonded to parent with dihedral phi (radians, in the parent's
@@ -322,7 +324,10 @@ static aqs_status molecule_add_atom(molecule_builder *b, int32_t parent, double 
                                     int terminal, int backbone, int32_t *out_body)
 {
     const double radius = 0.5; /* inertia of a ball-ish atom: 0.4 m r^2 */
-    const double mass = atom_mass(b->rng, terminal, backbone);
+    const double mass = atom_mass(b->rng, terminal, backbone) *
+                        (terminal && b->terminals++ % BENCH_MOLECULE_HEAVY_EVERY == BENCH_MOLECULE_HEAVY_EVERY / 2
+                             ? b->heavy
+                             : 1.0);
     const double moment = 0.4 * mass * radius * radius;
     const double inertia[9] = {moment, 0.0, 0.0, 0.0, moment, 0.0, 0.0, 0.0, moment};
     double pos[3], quat[4];
@@ -407,8 +412,8 @@ static aqs_status molecule_add_side_chain(molecule_builder *b, int32_t host, dou
     return AQS_OK;
 }
 
-aqs_status bench_build_molecule_ex(aqs_linkage *linkage, int32_t njoints, uint64_t seed,
-                                   int32_t *parents, int32_t *backbone_atoms)
+static aqs_status build_molecule(aqs_linkage *linkage, int32_t njoints, uint64_t seed, int32_t *parents,
+                                 int32_t *backbone_atoms, double heavy)
 {
     bench_rng rng;
     molecule_builder b;
@@ -432,6 +437,8 @@ aqs_status bench_build_molecule_ex(aqs_linkage *linkage, int32_t njoints, uint64
     b.linkage = linkage;
     b.rng = &rng;
     b.parents = parents;
+    b.heavy = heavy;
+    b.terminals = 0;
     for (k = 0; k < backbone && st == AQS_OK; ++k) {
         int32_t atom;
         double side_phi = 0.0;
@@ -453,9 +460,21 @@ aqs_status bench_build_molecule_ex(aqs_linkage *linkage, int32_t njoints, uint64
     return st;
 }
 
+aqs_status bench_build_molecule_ex(aqs_linkage *linkage, int32_t njoints, uint64_t seed,
+                                   int32_t *parents, int32_t *backbone_atoms)
+{
+    return build_molecule(linkage, njoints, seed, parents, backbone_atoms, 1.0);
+}
+
 aqs_status bench_build_molecule(aqs_linkage *linkage, int32_t njoints, uint64_t seed)
 {
-    return bench_build_molecule_ex(linkage, njoints, seed, NULL, NULL);
+    return build_molecule(linkage, njoints, seed, NULL, NULL, 1.0);
+}
+
+aqs_status bench_build_molecule_heavy(aqs_linkage *linkage, int32_t njoints, uint64_t seed, double heavy)
+{
+    if (!(heavy > 0.0) || !isfinite(heavy)) return AQS_EINVAL;
+    return build_molecule(linkage, njoints, seed, NULL, NULL, heavy);
 }
 
 /* ------------------------------------------------------------------------

@@ -92,6 +92,18 @@ aqs_status bench_build_molecule(aqs_linkage *linkage, int32_t njoints, uint64_t 
 aqs_status bench_build_molecule_ex(aqs_linkage *linkage, int32_t njoints, uint64_t seed,
                                    int32_t *parents, int32_t *backbone_atoms);
 
+/** Every this many-th terminal atom (the one in the middle of each run of
+ *  this many) weighs bench_build_molecule_heavy's factor times its mass. */
+#define BENCH_MOLECULE_HEAVY_EVERY 400
+
+/** As bench_build_molecule (the same tree, positions and random draws), with
+ *  the mass and inertia of every BENCH_MOLECULE_HEAVY_EVERY-th terminal atom
+ *  multiplied by heavy (> 0, finite; else AQS_EINVAL): at heavy = 1e3 the
+ *  linkage has heavy children (a child 1e3 times its parent), on which the
+ *  exact articulated-body solve refines (docs/bench.md, "The automatic path
+ *  on heavy linkages"). heavy = 1 builds bench_build_molecule's linkage. */
+aqs_status bench_build_molecule_heavy(aqs_linkage *linkage, int32_t njoints, uint64_t seed, double heavy);
+
 /* ------------------------------------------------------------------------
  * millipede: spine and legs (paper section 6.2, Figures 4 and 5)
  * ---------------------------------------------------------------------- */

@@ -21,7 +21,12 @@
  *       while after exact steps (the tree stale by their own moves) it does
  *       switch back;
  *   (h) the adaptive refinement's cost is counted after a solve that found it
- *       worth it. */
+ *       worth it;
+ *   (i) the exact path is priced as the last exact solve ran (the work meter
+ *       of src/solve/cost.h): refined on a linkage with heavy bodies, the
+ *       pass alone with the refinement off;
+ *   (j) on that linkage, with a few forces, the model keeps the adaptive
+ *       path, dearer than the pass alone and cheaper than the refined solve. */
 #include "testutil.h"
 
 #include <math.h>
@@ -31,17 +36,20 @@
 #include "cost.h"
 
 #define NJ 4000
+/* molecule_ex's heavy bodies: every this many-th */
+#define HEAVY_EVERY 400
 
 /* A molecule-like tree: revolute torsions about the incoming bond, a
  * backbone with side chains of 1-4 atoms on about half its atoms. */
-static aqs_linkage *molecule(uint64_t seed)
+static aqs_linkage *molecule_ex(uint64_t seed, double heavy)
 {
     aqs_linkage *L = test_new_linkage();
     uint64_t rng = seed;
     int32_t i, back = -1;
     double q1[4] = {1, 0, 0, 0};
     for (i = 0; i < NJ; i++) {
-        double m = test_uniform(&rng, 12, 33), com[3] = {0, 0, 0}, I[9] = {0};
+        double m = test_uniform(&rng, 12, 33) * (i % HEAVY_EVERY == HEAVY_EVERY / 2 ? heavy : 1.0), com[3] = {0, 0, 0},
+               I[9] = {0};
         I[0] = I[4] = I[8] = 0.1 * m;
         assert_int_equal(aqs_body_add(L, m, com, I, NULL), AQS_OK);
     }
@@ -74,6 +82,8 @@ static aqs_linkage *molecule(uint64_t seed)
     assert_int_equal(aqs_linkage_set_adaptive_refinement(L, 0.0), AQS_OK);
     return L;
 }
+
+static aqs_linkage *molecule(uint64_t seed) { return molecule_ex(seed, 1.0); }
 
 /* nf forces of 1 N on seeded bodies (the same on every call with seed). */
 static void set_forces(aqs_linkage *L, int nf, uint64_t seed)
@@ -448,6 +458,91 @@ static void test_refinement_priced(void **state)
     aqs_linkage_destroy(B);
 }
 
+/* (i) The exact path priced as it ran (cost.h's work meter): on a linkage
+ * with heavy bodies (1e3 times their neighbours: every articulated-body
+ * solve refines) the model's exact cost after an exact solve is at least the
+ * pass and what its refinement always does (one double-double residual and
+ * the accelerations it needs, one correction), and exactly the pass where
+ * the refinement is off (the same linkage and loads). */
+static void test_exact_priced_as_run(void **state)
+{
+    aqs_linkage *H = molecule_ex(5, 1e3), *R = molecule_ex(5, 1e3);
+    aqs_linkage *both[2];
+    int32_t ne, k, step;
+    (void)state;
+    both[0] = H;
+    both[1] = R;
+    assert_int_equal(aqs_linkage_get_sizes(H, NULL, &ne, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_exact_refinement(R, 0), AQS_OK);
+    for (k = 0; k < 2; k++) {
+        set_forces(both[k], 400, 11);
+        assert_int_equal(aqs_linkage_set_tolerance(both[k], AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+        assert_int_equal(aqs_linkage_solve(both[k]), AQS_OK); /* adaptive: the first after the tolerance */
+    }
+    for (step = 0; step < 3; step++) {
+        aqs_solve_stats h, r;
+        const double pass = ne * (COST_ABA_JOINT + COST_ABA_MOVE);
+        const double least = ne * (COST_ABA_JOINT + COST_DD_ACCEL + COST_DD_RESIDUAL + COST_ABA_CORRECTION + COST_ABA_MOVE);
+        assert_int_equal(aqs_linkage_step(H, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_step(R, 1e-3), AQS_OK);
+        h = stats_of(H);
+        r = stats_of(R);
+        print_message("step %d: exact priced %.4g refined, %.4g unrefined; the pass %.4g\n", (int)step,
+                      h.cost_exact, r.cost_exact, pass);
+        assert_int_equal(h.path, AQS_PATH_EXACT_ABA); /* 400 forces: exact from the first step */
+        assert_int_equal(r.path, AQS_PATH_EXACT_ABA);
+        assert_true(h.auto_chosen && r.auto_chosen);
+        assert_true(r.cost_exact == pass);
+        /* the first step's price is the model's before any exact solve
+         * (the pass and the least refinement); then what the last one ran */
+        assert_true(h.cost_exact >= least);
+        if (step > 0) assert_true(h.cost_exact > least);
+    }
+    aqs_linkage_destroy(H);
+    aqs_linkage_destroy(R);
+}
+
+/* (j) The same heavy linkage with 8 forces: an adaptive step there costs
+ * 1.75x the articulated-body pass alone (its twin's counts, priced by
+ * cost.h) but less than the refined exact solve, so the model keeps the
+ * adaptive path on every step (priced at the pass, as before the work
+ * meter, the exact path looked cheaper: the model took it and paid the
+ * refinement, 2.4 .. 4.5x the pass, on every step). */
+static void test_heavy_stays_adaptive(void **state)
+{
+    aqs_linkage *L = molecule_ex(5, 1e3), *T = molecule_ex(5, 1e3);
+    int32_t ne, step, exact_steps = 0;
+    (void)state;
+    assert_int_equal(aqs_linkage_get_sizes(L, NULL, &ne, NULL, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_auto(T, 0), AQS_OK);
+    set_forces(L, 8, 11);
+    set_forces(T, 8, 11);
+    assert_int_equal(aqs_linkage_set_tolerance(L, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_set_tolerance(T, AQS_METRIC_REL_JOINT, ldexp(1.0, -19)), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(L), AQS_OK);
+    assert_int_equal(aqs_linkage_solve(T), AQS_OK);
+    for (step = 0; step < 8; step++) {
+        aqs_solve_stats s, t;
+        const double pass = ne * (COST_ABA_JOINT + COST_ABA_MOVE);
+        double twin;
+        assert_int_equal(aqs_linkage_step(L, 1e-3), AQS_OK);
+        assert_int_equal(aqs_linkage_step(T, 1e-3), AQS_OK);
+        s = stats_of(L);
+        t = stats_of(T);
+        twin = adaptive_step_cost(&t, ne);
+        print_message("step %d: path %d, adaptive %.4g (twin %.4g), exact %.4g, the pass %.4g\n", (int)step, (int)s.path,
+                      s.cost_adaptive, twin, s.cost_exact, pass);
+        exact_steps += s.path != AQS_PATH_ADAPTIVE;
+        assert_true(s.auto_chosen);
+        /* the regime: dearer than the pass, cheaper than the refined solve */
+        assert_true(twin > 1.25 * pass && twin < s.cost_exact);
+        assert_int_equal(s.computed_joints, t.computed_joints); /* the same steps */
+    }
+    assert_int_equal(exact_steps, 0);
+    aqs_linkage_destroy(L);
+    aqs_linkage_destroy(T);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -458,6 +553,8 @@ int main(void)
         cmocka_unit_test(test_fallback_first),
         cmocka_unit_test(test_caller_staleness_is_no_switch),
         cmocka_unit_test(test_refinement_priced),
+        cmocka_unit_test(test_exact_priced_as_run),
+        cmocka_unit_test(test_heavy_stays_adaptive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -3,13 +3,18 @@
 
 Runs build/bench/aqs-bench under callgrind (instruction counts: the same on
 every machine and at any load) on the 5,000-joint molecule, once per DCA form,
-and prints the #define lines of src/solve/cost.h: each constant is the inclusive
-instruction count per call of the kernel it prices (per joint for the
-articulated-body solve and the exact step's frame refresh).
+and build/bench/autocount_main for the work meter's passes (the exact
+refinements: the articulated-body one on the molecule with heavy atoms,
+bench_build_molecule_heavy at 1e3, and the exact DCA's on the plain molecule),
+and prints the #define lines of src/solve/cost.h: each constant is the
+inclusive instruction count per call of the kernel it prices (per joint for
+the articulated-body solve, the exact step's frame refresh and the
+refinements' passes).
 
-    python3 tools/calibrate_cost.py [--bench build/bench/aqs-bench] [--joints 5000]
+    python3 tools/calibrate_cost.py [--bench build/bench/aqs-bench]
+        [--autocount build/bench/autocount_main] [--joints 5000]
 
-Needs valgrind. About a minute.
+Needs valgrind. About two minutes.
 """
 import argparse
 import collections
@@ -65,6 +70,17 @@ def run(bench, joints, form, steps):
         os.unlink(out)
 
 
+def run_autocount(autocount, joints, mode, heavy):
+    out = tempfile.NamedTemporaryFile(prefix="aqs-cost-", suffix=".out", delete=False).name
+    cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out, "--toggle-collect=bench_counted_steps",
+           autocount, mode, str(joints), "10", "4", "sqrt", str(heavy)]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        return parse(out)
+    finally:
+        os.unlink(out)
+
+
 def per_call(incl, calls, name):
     if calls[name] == 0:
         sys.exit("calibrate_cost: %s was never called" % name)
@@ -74,6 +90,7 @@ def per_call(incl, calls, name):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bench", default="build/bench/aqs-bench")
+    ap.add_argument("--autocount", default="build/bench/autocount_main")
     ap.add_argument("--joints", type=int, default=5000)
     ap.add_argument("--steps", type=int, default=12)
     a = ap.parse_args()
@@ -96,6 +113,20 @@ def main():
     # an exact step leaves the tree frames stale (frames_positions_moved); the
     # adaptive path pays their refresh in its full update after exact steps
     c["COST_ABA_MOVE"] = per_call(incl, calls, "frames_positions_moved") / ne + per_call(incl, calls, "joint_integrate")
+    # the work meter's passes (cost.h): the articulated-body refinement on the
+    # molecule with heavy atoms (every solve refines), the exact DCA's on the
+    # plain molecule (every solve refined by GMRES)
+    hi, hc = run_autocount(a.autocount, a.joints, "exact", 1e3)
+    di, dc = run_autocount(a.autocount, a.joints, "exactdca", 1)
+    # abarefine.c's correction, with what aba_refine does besides its
+    # double-double passes (the state's copies, the forces' loop)
+    c["COST_ABA_CORRECTION"] = (hi["aba_refine"] - hi["residual_dd_eval"] - hi["residual_dd_accelerations"] -
+                                hi["residual_dd_acc_add"]) / hc["correction"] / ne
+    c["COST_DD_RESIDUAL"] = per_call(hi, hc, "residual_dd_eval") / ne
+    c["COST_DD_ACCEL"] = per_call(hi, hc, "residual_dd_accelerations") / ne
+    c["COST_RESIDUAL"] = per_call(di, dc, "residual_eval") / ne
+    c["COST_BACKSUB"] = per_call(incl, calls, "dca_node_backsub")
+    c["COST_NODE_LOADS"] = per_call(di, dc, "dca_node_loads")
     print("/* tools/calibrate_cost.py --joints %d --steps %d */" % (a.joints, a.steps))
     for k, v in c.items():
         print("#define %s %.1f" % (k, round(v, -1)))

@@ -8,6 +8,7 @@
 #include "aba.h"
 #include "kintree.h"
 #include "adaptive.h"
+#include "cost.h"
 #include "aqs.h"
 #include "assembly.h"
 #include "autopath.h"
@@ -233,6 +234,7 @@ AQS_API aqs_status aqs_linkage_set_exact_refinement(aqs_linkage *L, int32_t max_
     if (max_corrections < 0 || max_corrections > AQS_REFINEMENT_MAX)
         return lk_fail(L, AQS_EINVAL, "%s: max_corrections = %d is not in 0 .. %d", fn, (int)max_corrections,
                        AQS_REFINEMENT_MAX);
+    if (max_corrections != L->refine_max) L->ap.exact = 0.0; /* the exact path's cost changes: priced anew */
     L->refine_max = max_corrections;
     return AQS_OK;
 }
@@ -827,26 +829,34 @@ static aqs_status exact_solve(aqs_linkage *L, const char *fn, int32_t *path)
     aqs_status st = AQS_OK;
     const int skip = L->aba_skip > 0 && L->refine_max > 0;
     memcpy(saved, L->error, sizeof saved);
+    L->ap.work = 0.0; /* the work meter (cost.h): this solve's count, for the automatic path */
     if (skip) {
         L->aba_skip--;
     } else {
         st = aba_solve(L);
         *path = AQS_PATH_EXACT_ABA;
-        if (!(st == AQS_OK && L->aba.lost) && !(st == AQS_ENUMERIC && L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)) return st;
+        if (!(st == AQS_OK && L->aba.lost) && !(st == AQS_ENUMERIC && L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)) {
+            if (st == AQS_OK) L->ap.exact = L->ap.work;
+            return st;
+        }
         L->aba_skip = AQS_HANDOVER_RUN;
     }
     {
         const double eps = s->eps;
         const int32_t cap = s->max_computed;
         memcpy(L->error, saved, sizeof saved); /* the ABA's failure is not the call's */
-        if ((st = dca_enable(L, fn)) != AQS_OK || (st = update_coefficients(L)) != AQS_OK) return st;
+        if ((st = dca_enable(L, fn)) != AQS_OK) return st;
+        cost_count(L, autopath_update_cost(L));
+        if ((st = update_coefficients(L)) != AQS_OK) return st;
         s->eps = 0.0;
         s->max_computed = 0;
         adaptive_solve(L);
+        cost_count(L, COST_PROCESS * (double)s->nprocessed);
         refine_exact(L);
         s->eps = eps;
         s->max_computed = cap;
         *path = AQS_PATH_EXACT_DCA;
+        L->ap.exact = L->ap.work;
     }
     return AQS_OK;
 }

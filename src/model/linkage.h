@@ -324,6 +324,9 @@ typedef struct {
     int32_t path;      /* AQS_PATH_* of the last solve */
     int chose;         /* the model chose the last solve's path */
     double cost_adaptive, cost_exact; /* the model's costs for the last solve (0: not asked) */
+    double work;       /* the work meter (src/solve/cost.h): instructions counted by the passes
+                          since the last exact solve began */
+    double exact;      /* what the last exact solve counted (0: none since the reset) */
 } autopath_state;
 
 /* Memory through the linkage's allocator (src/base/pool.c). Every block

@@ -31,6 +31,7 @@
 #include <string.h>
 
 #include "abarefine.h"
+#include "cost.h"
 #include "adaptive.h"
 #include "dca.h"
 #include "dense.h"
@@ -655,6 +656,7 @@ aqs_status aba_solve(aqs_linkage *L)
     L->aba.world_valid = world;
     update_loads(L); /* the composites' loads in their frames */
     L->aba.world_valid = 0;
+    cost_count_joints(L, COST_ABA_JOINT);
     if ((st = backward(L)) != AQS_OK) {
         L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
         return st;

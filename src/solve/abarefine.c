@@ -38,6 +38,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cost.h"
 #include "ddouble.h"
 #include "dense.h"
 #include "kintree.h"
@@ -113,6 +114,7 @@ static void correction(aqs_linkage *L, const double *r, double *dq, double *da)
     aba_state *a = &L->aba;
     double S[36], Dinv[36], w[6];
     int32_t k, i, j;
+    cost_count_joints(L, COST_ABA_CORRECTION);
     for (k = m->ne - 1; k >= 0; k--) {
         const aba_joint *jt = &a->joint[k];
         aba_node *nd = &a->node[k];

@@ -20,6 +20,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "cost.h"
 #include "dca.h"
 #include "rounding.h"
 
@@ -355,6 +356,7 @@ int32_t arefine_solve(aqs_linkage *L, int *converged)
     double first_fstep = 0.0, later_fstep = 0.0; /* the first's; the largest after it */
     if (s->nprocessed == 0 || L->refine_max <= 0 || L->dca_form != AQS_DCA_FORM_SQRT) return 0;
     if (arefine_alloc(L) != 0 || keep_factors(L) != 0) return 0; /* out of memory: the answer as it is */
+    cost_count(L, COST_AREFINE * (double)s->nprocessed);
     R = L->arf;
     for (i = 0; i < s->nprocessed; i++) R->inp[s->processed[i]] = 1;
     rn = adaptive_residual(L);

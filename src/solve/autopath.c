@@ -5,8 +5,11 @@
  *              (+ E C_arefine when the last adaptive solve refined its
  *              computed joints; C_node + C_keep once the linkage keeps load
  *              factors)
- *   exact    = ne C_aba            [+ ne C_aba_move]
- * (brackets: a step's move and its update after the move). stale is the
+ *   exact    = W_exact             [+ ne C_aba_move]
+ * (brackets: a step's move and its update after the move). W_exact: what
+ * the last exact solve counted (cost.h's work meter: the articulated-body
+ * pass ne C_aba, its refinement's passes where it refined, the exact DCA's
+ * where it handed over), ne C_aba before any. stale is the
  * recomputation of the nodes stale now: every node after exact steps, which
  * leave the tree's coefficients to the next adaptive solve. E: internal
  * nodes an adaptive solve processes, P: of which predicted (their factors
@@ -48,6 +51,7 @@ void autopath_reset(aqs_linkage *L)
     a->refines = 0;
     a->since = 0;
     a->own_stale = 0;
+    a->exact = 0.0;
 }
 
 void autopath_tree_moved(aqs_linkage *L, int own) { L->ap.own_stale = own; }
@@ -57,11 +61,34 @@ int autopath_applies(const aqs_linkage *L)
     return L->ap.on && L->ap.known && L->s.eps > 0.0 && L->s.max_computed == 0 && L->t.nnodes > 0;
 }
 
-static double node_cost(const aqs_linkage *L)
+/* The exact path's solve: the count of the last exact one (cost.h's work
+ * meter: refined or handed over, it priced what it did); before any, the
+ * articulated-body pass, and on a linkage with a heavy child (which always
+ * refines) its refinement's least: one double-double residual and the
+ * accelerations it needs, one correction. */
+static double exact_cost(const aqs_linkage *L)
 {
-    if (L->dca_form == AQS_DCA_FORM_PHI) return COST_DCA_NODE_PHI;
-    /* a linkage that refined keeps every node update's load factors */
-    return COST_DCA_NODE_SQRT + (L->t.lf ? COST_KEEP_FACTORS : 0.0);
+    double per_joint = COST_ABA_JOINT;
+    if (L->ap.exact > 0.0) return L->ap.exact;
+    if (L->refine_max > 0 && L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)
+        per_joint += COST_DD_ACCEL + COST_DD_RESIDUAL + COST_ABA_CORRECTION;
+    return per_joint * (double)L->m.ne;
+}
+
+double autopath_update_cost(const aqs_linkage *L)
+{
+    const tree *t = &L->t;
+    const solve_state *s = &L->s;
+    const double cn = cost_node(L);
+    double st = 0.0;
+    int32_t k;
+    if (t->all_dirty || !t->data) return (double)L->m.ne * (cn + COST_FACTOR);
+    for (k = 0; k < t->ndirty; k++) {
+        int32_t n = t->dirty[k];
+        if (t->nodes[n].joint < 0) continue;
+        st += cn + (s->pred && s->pred[n] ? 0.0 : COST_FACTOR);
+    }
+    return st;
 }
 
 /* The model's costs (instructions) of the next solve, or step when stepping
@@ -71,25 +98,13 @@ static double node_cost(const aqs_linkage *L)
 static void autopath_costs(const aqs_linkage *L, int stepping, double *adaptive, double *exact,
                            double *stale)
 {
-    const tree *t = &L->t;
-    const solve_state *s = &L->s;
-    const double cn = node_cost(L), ne = (double)L->m.ne;
+    const double cn = cost_node(L), ne = (double)L->m.ne;
     const double E = L->ap.proc, P = L->ap.pred;
-    double st = 0.0, ad;
-    if (t->all_dirty || !t->data) {
-        st = ne * (cn + COST_FACTOR);
-    } else {
-        int32_t k;
-        for (k = 0; k < t->ndirty; k++) {
-            int32_t n = t->dirty[k];
-            if (t->nodes[n].joint < 0) continue;
-            st += cn + (s->pred && s->pred[n] ? 0.0 : COST_FACTOR);
-        }
-    }
-    ad = st + E * (COST_PROCESS + (L->ap.refines ? COST_AREFINE : 0.0));
+    const double st = autopath_update_cost(L);
+    double ad = st + E * (COST_PROCESS + (L->ap.refines ? COST_AREFINE : 0.0));
     if (stepping) ad += E * (COST_MOVE + cn) + (E - P) * COST_FACTOR;
     *adaptive = ad;
-    *exact = ne * (COST_ABA_JOINT + (stepping ? COST_ABA_MOVE : 0.0));
+    *exact = exact_cost(L) + (stepping ? ne * COST_ABA_MOVE : 0.0);
     *stale = st;
 }
 

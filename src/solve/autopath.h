@@ -20,6 +20,11 @@ int autopath_applies(const aqs_linkage *L);
  * then the moved ones, none after it); if so the update is skipped (an
  * exact step does not need it). Changes nothing. */
 int autopath_prefers_exact(const aqs_linkage *L, int stepping);
+/* What the next update_coefficients would cost (instructions): the stale
+ * internal nodes' coefficients and factors (a predicted node's factor is
+ * skipped). Read by the model and by the exact solve's work meter (cost.h)
+ * when the exact path hands over to the DCA. */
+double autopath_update_cost(const aqs_linkage *L);
 /* Decide the next solve's path (1: exact) and keep the regret of the
  * exact choices current. Call only when autopath_applies. */
 int autopath_decide(aqs_linkage *L, int stepping);

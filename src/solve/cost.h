@@ -14,6 +14,8 @@
 #ifndef AQS_COST_H
 #define AQS_COST_H
 
+#include "linkage.h"
+
 /* An internal node's DCA coefficients (dca_node_update), by DCA form
  * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
 #define COST_DCA_NODE_SQRT 14710.0
@@ -42,5 +44,50 @@
 /* An exact step's move, per effective joint: joint_integrate, and
  * frames_all per joint. */
 #define COST_ABA_MOVE 40.0
+
+/* The work meter: an exact solve's passes add their cost to L->ap.work as
+ * they run (cost_count), and src/api/api.c's exact_solve keeps the count of
+ * the last exact solve as the exact path's cost (autopath.c), so that the
+ * model prices what that solve did: the articulated-body pass alone
+ * (COST_ABA_JOINT a joint, counted in aba_solve), or refined (a linkage with
+ * a heavy child refines every solve: 2.6 .. 5.7x the pass alone on the
+ * molecule with heavy atoms), or handed over to the exact DCA (the stale
+ * nodes' update as autopath_update_cost prices it, COST_PROCESS a processed
+ * node, COST_AREFINE a node of the adaptive refinement, and the refinement's
+ * passes below). Counted against callgrind (docs/bench.md, "The automatic
+ * path on heavy linkages"): the refined articulated-body solve within 1 %,
+ * the exact DCA's refined solve 10 % low (its Krylov vectors are not
+ * counted). Per call, inclusive, from tools/calibrate_cost.py's runs of
+ * bench/autocount_main (fma double-double; without fma the double-double
+ * passes cost ~1.6x, docs/math.md 5b):
+ *   per effective joint: the articulated-body refinement's correction
+ *   (abarefine.c, with the refinement's copies of its state), a
+ *   double-double residual (residual_dd_eval), the bodies' double-double
+ *   accelerations (residual_dd_accelerations, residual_dd_acc_add), a
+ *   residual pass in double (residual_eval, residual_mass_mul,
+ *   residual_balance; residual_accelerations alone counts half);
+ *   per node: the exact DCA refinement's correction (refine.c: each internal
+ *   node's update, COST_DCA_NODE_*, or its loads, COST_NODE_LOADS, and its
+ *   back-substitution, COST_BACKSUB). */
+#define COST_ABA_CORRECTION 510.0
+#define COST_DD_RESIDUAL 1390.0
+#define COST_DD_ACCEL 450.0
+#define COST_RESIDUAL 300.0
+#define COST_BACKSUB 730.0
+#define COST_NODE_LOADS 900.0
+
+static inline void cost_count(aqs_linkage *L, double instructions) { L->ap.work += instructions; }
+/* per_joint times the effective joints */
+static inline void cost_count_joints(aqs_linkage *L, double per_joint)
+{
+    L->ap.work += per_joint * (double)L->m.ne;
+}
+/* An internal node's DCA coefficients in the linkage's form (and its load
+ * factors kept, once it keeps them). */
+static inline double cost_node(const aqs_linkage *L)
+{
+    if (L->dca_form == AQS_DCA_FORM_PHI) return COST_DCA_NODE_PHI;
+    return COST_DCA_NODE_SQRT + (L->t.lf ? COST_KEEP_FACTORS : 0.0);
+}
 
 #endif

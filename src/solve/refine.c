@@ -34,6 +34,7 @@
 
 #include "aba.h"
 #include "arefine.h"
+#include "cost.h"
 #include "dca.h"
 #include "residual.h"
 #include "rounding.h"
@@ -296,15 +297,24 @@ static int correction(aqs_linkage *L, double *r, int loads_only)
     }
     L->tau = r;
     for (n = 0; n < t->nnodes && !fail; n++) /* children first */
-        if (t->nodes[n].joint >= 0 && (!loads_only || dca_node_loads(L, n) != 0) && dca_node_update(L, n) != 0)
-            fail = 1;
+        if (t->nodes[n].joint >= 0) {
+            if (loads_only && dca_node_loads(L, n) == 0) {
+                cost_count(L, COST_NODE_LOADS);
+                continue;
+            }
+            cost_count(L, (loads_only ? COST_NODE_LOADS : 0.0) + cost_node(L));
+            if (dca_node_update(L, n) != 0) fail = 1;
+        }
     L->tau = tau;
     if (fail) return -1;
     memset(t->data + nd_xf(&t->nodes[t->root]), 0, 6 * (size_t)t->nodes[t->root].nh * sizeof(double));
     L->qdd = R->dq;
     L->cforce = R->df;
     for (n = t->nnodes - 1; n >= 0; n--) /* parents first */
-        if (t->nodes[n].joint >= 0) dca_node_backsub(L, n);
+        if (t->nodes[n].joint >= 0) {
+            cost_count(L, COST_BACKSUB);
+            dca_node_backsub(L, n);
+        }
     L->qdd = qdd;
     L->cforce = cforce;
     return 0;

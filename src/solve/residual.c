@@ -29,6 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cost.h"
 #include "kintree.h"
 
 /* The larger of a (never NaN) and b, a NaN b dropped as fmax drops it: the
@@ -126,6 +127,7 @@ static double id_pass(aqs_linkage *L, const double *qdd, double *r, int homog)
 
 void residual_accelerations(aqs_linkage *L, const double *qdd)
 {
+    cost_count_joints(L, 0.5 * COST_RESIDUAL);
     outward(L, qdd, 0);
 }
 
@@ -137,6 +139,7 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
     double bmax = 0.0, tmax = 0.0;
     int32_t k, i, j;
+    cost_count_joints(L, COST_RESIDUAL);
     int bad = 0;
     for (k = 0; k < m->ne; k++) { /* -(I a_c) into v.s.U, |I a_c| into work */
         double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k;
@@ -184,11 +187,13 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
 
 double residual_eval(aqs_linkage *L, const double *qdd, double *r)
 {
+    cost_count_joints(L, COST_RESIDUAL);
     return id_pass(L, qdd, r, 0);
 }
 
 void residual_mass_mul(aqs_linkage *L, const double *v, double *Mv)
 {
+    cost_count_joints(L, COST_RESIDUAL);
     (void)id_pass(L, v, Mv, 1);
 }
 
@@ -234,8 +239,9 @@ void residual_dd_select(aqs_linkage *L)
 #endif
 }
 
-void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble *acc)
+void residual_dd_accelerations(aqs_linkage *L, const double *qdd, ddouble *acc)
 {
+    cost_count_joints(L, COST_DD_ACCEL);
 #ifdef DD_FMA_TARGET
     if (L->dd_fma) {
         dd_accelerations_fma(L, qdd, acc);
@@ -245,8 +251,9 @@ void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble 
     dd_accelerations_dekker(L, qdd, acc);
 }
 
-double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces)
+double residual_dd_eval(aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces)
 {
+    cost_count_joints(L, COST_DD_RESIDUAL);
 #ifdef DD_FMA_TARGET
     if (L->dd_fma) return dd_eval_fma(L, acc, fw, r, forces);
 #endif
@@ -257,6 +264,7 @@ void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc)
 {
     const aba_state *a = &L->aba;
     int32_t k, i;
+    cost_count_joints(L, COST_DD_ACCEL);
     outward(L, dq, 1);
     for (k = 0; k < L->m.ne; k++)
         for (i = 0; i < 6; i++) acc[6 * (size_t)k + i] = dd_add(acc[6 * (size_t)k + i], dd_from(a->node[k].v.s.acc[i]));

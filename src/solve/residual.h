@@ -45,7 +45,7 @@ void residual_forces(const aqs_linkage *L, double *cforce);
  * touched; residual_poses or an articulated-body solve sets the poses).
  * residual_dd_accelerations: the bodies' accelerations a_c (6 per joint, the
  * ABA order, relative to free fall) of qdd, outward from a_0 = -g. */
-void residual_dd_accelerations(const aqs_linkage *L, const double *qdd, ddouble *acc);
+void residual_dd_accelerations(aqs_linkage *L, const double *qdd, ddouble *acc);
 /* Which product the double-double passes take (L->dd_fma): fma's where the
  * processor has it and AQS_SIMD is not "sse2", else Dekker's (the same
  * results). Once, before the first pass (with the arrays of a refinement). */
@@ -57,7 +57,7 @@ void residual_dd_select(aqs_linkage *L);
  * joint force and the sum of the bodies' terms |I_c a_c| + m_c |g| (torques
  * weighed by 1/l as in rounding.c; 0 when both are 0; NaN when a value is
  * not finite). */
-double residual_dd_eval(const aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces);
+double residual_dd_eval(aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces);
 /* acc += the bodies' accelerations of dq from rest (6 per joint, the ABA
  * order), formed in double (a correction's) and added in double-double;
  * overwrites the node values' accelerations (v.s.acc). */
