@@ -326,7 +326,8 @@ typedef struct {
     double cost_adaptive, cost_exact; /* the model's costs for the last solve (0: not asked) */
     double work;       /* the work meter (src/solve/cost.h): instructions counted by the passes
                           since the last exact solve began */
-    double exact;      /* what the last exact solve counted (0: none since the reset) */
+    double exact;      /* what the last exact solve counted (0: none yet, or the exact
+                          refinement's setting changed since) */
 } autopath_state;
 
 /* Memory through the linkage's allocator (src/base/pool.c). Every block

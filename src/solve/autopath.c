@@ -40,6 +40,7 @@
 void autopath_init(aqs_linkage *L)
 {
     L->ap.on = 1;
+    L->ap.exact = 0.0;
     autopath_reset(L);
 }
 
@@ -51,7 +52,9 @@ void autopath_reset(aqs_linkage *L)
     a->refines = 0;
     a->since = 0;
     a->own_stale = 0;
-    a->exact = 0.0;
+    /* a->exact stays: what an exact solve costs does not depend on the
+     * tolerance, the cap, the prediction or this mode (an exact solve before
+     * the tolerance was set prices the first choice) */
 }
 
 void autopath_tree_moved(aqs_linkage *L, int own) { L->ap.own_stale = own; }
