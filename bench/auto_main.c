@@ -3,7 +3,7 @@
  * against the exact step, the two linkages stepped alternately in one process
  * (issue 14, item 3).
  *
- *   auto_main [--joints N] [--forces LIST] [--steps K] [--eps E]
+ *   auto_main [--joints N] [--forces LIST] [--steps K] [--eps E] [--heavy F]
  *
  * Two copies of the molecule (bench/scenes.c, seed 1) under the same N_f
  * seeded unit forces: E is solved exactly (no tolerance: the articulated-body
@@ -13,6 +13,8 @@
  * what a user of either mode pays per step, with the same machine load on both
  * sides (aqs-bench times its exact steps on a third linkage right after a DCA
  * step, which is not the same thing: docs/bench.md, "The automatic path").
+ * --heavy F: bench_build_molecule_heavy's molecule (every 400th terminal
+ * atom F times heavier; the exact solves refine there), default 1.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -26,13 +28,15 @@
 
 #define MAX_STEPS 1000
 
+static double heavy = 1.0;
+
 static aqs_linkage *molecule(int32_t joints, int32_t nf)
 {
     aqs_linkage *L = NULL;
     bench_rng r;
     int32_t i;
     if (aqs_linkage_create(&L) != AQS_OK) return NULL;
-    if (bench_build_molecule(L, joints, 1) != AQS_OK || aqs_linkage_finalize(L) != AQS_OK) {
+    if (bench_build_molecule_heavy(L, joints, 1, heavy) != AQS_OK || aqs_linkage_finalize(L) != AQS_OK) {
         fprintf(stderr, "auto_main: %s\n", aqs_linkage_last_error(L));
         aqs_linkage_destroy(L);
         return NULL;
@@ -91,16 +95,17 @@ int main(int argc, char **argv)
         if (!strcmp(argv[a], "--joints") && a + 1 < argc) joints = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--steps") && a + 1 < argc) steps = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--eps") && a + 1 < argc) eps = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--heavy") && a + 1 < argc) heavy = atof(argv[++a]);
         else if (!strcmp(argv[a], "--forces") && a + 1 < argc) {
             strncpy(forces, argv[++a], sizeof forces - 1);
             forces[sizeof forces - 1] = '\0';
         } else {
-            fprintf(stderr, "usage: auto_main [--joints N] [--forces LIST] [--steps K] [--eps E]\n");
+            fprintf(stderr, "usage: auto_main [--joints N] [--forces LIST] [--steps K] [--eps E] [--heavy F]\n");
             return 2;
         }
     }
-    if (joints < 1 || steps < 1 || steps > MAX_STEPS || !(eps > 0.0)) {
-        fprintf(stderr, "auto_main: need joints >= 1, 1 <= steps <= %d, eps > 0\n", MAX_STEPS);
+    if (joints < 1 || steps < 1 || steps > MAX_STEPS || !(eps > 0.0) || !(heavy > 0.0)) {
+        fprintf(stderr, "auto_main: need joints >= 1, 1 <= steps <= %d, eps > 0, heavy > 0\n", MAX_STEPS);
         return 2;
     }
     for (tok = strtok(forces, ","); tok && nnf < 32; tok = strtok(NULL, ",")) nf[nnf++] = atoi(tok);

@@ -652,7 +652,9 @@ AQS_API aqs_status aqs_linkage_get_prediction(const aqs_linkage *linkage, double
  *  each solve or step runs the cheaper of the adaptive solver and the
  *  exact articulated-body solve, as a cost model counted in instructions
  *  predicts it from the last solves' counts (nodes processed, predicted and
- *  stale; estimated from the accelerations after an exact solve). After
+ *  stale; estimated from the accelerations after an exact solve; the exact
+ *  path at what the last exact solve counted, its refinement or its
+ *  hand-over to the exact DCA included: docs/api.md). After
  *  exact solves every node of the assembly tree is stale, and a return to
  *  the adaptive solver recomputes them all: it happens once the exact
  *  solves have lost as much as that costs. The first solve after a
