@@ -465,7 +465,8 @@ static void test_refinement_priced(void **state)
  * refinement always does (one double-double residual and the accelerations
  * it needs, one correction): so from the first choice on, priced by the
  * exact solve made before the tolerance was set; and exactly the pass where
- * the refinement is off (the same linkage and loads). */
+ * the refinement is off (the same linkage and loads, or the same linkage
+ * once its refinement is turned off). */
 static void test_exact_priced_as_run(void **state)
 {
     aqs_linkage *H = molecule_ex(5, 1e3), *R = molecule_ex(5, 1e3);
@@ -499,6 +500,14 @@ static void test_exact_priced_as_run(void **state)
         assert_true(h.auto_chosen && r.auto_chosen);
         assert_true(r.cost_exact == pass);
         assert_true(h.cost_exact > least);
+    }
+    /* a new refinement count drops the price: the next choice is priced at
+     * the pass (no refinement to add) */
+    assert_int_equal(aqs_linkage_set_exact_refinement(H, 0), AQS_OK);
+    assert_int_equal(aqs_linkage_step(H, 1e-3), AQS_OK);
+    {
+        const aqs_solve_stats h = stats_of(H);
+        assert_true(h.auto_chosen && h.cost_exact == ne * (COST_ABA_JOINT + COST_ABA_MOVE));
     }
     aqs_linkage_destroy(H);
     aqs_linkage_destroy(R);

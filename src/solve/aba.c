@@ -31,8 +31,8 @@
 #include <string.h>
 
 #include "abarefine.h"
-#include "cost.h"
 #include "adaptive.h"
+#include "cost.h"
 #include "dca.h"
 #include "dense.h"
 #include "kintree.h"

@@ -139,8 +139,8 @@ double residual_balance(aqs_linkage *L, const double *cforce, double *work, doub
     const double gn = sqrt(L->gravity[0] * L->gravity[0] + L->gravity[1] * L->gravity[1] + L->gravity[2] * L->gravity[2]);
     double bmax = 0.0, tmax = 0.0;
     int32_t k, i, j;
-    cost_count_joints(L, COST_RESIDUAL);
     int bad = 0;
+    cost_count_joints(L, COST_RESIDUAL);
     for (k = 0; k < m->ne; k++) { /* -(I a_c) into v.s.U, |I a_c| into work */
         double *g = a->node[k].v.s.U, *h = work + 6 * (size_t)k;
         kin_inertia_mul(a->joint[k].I, a->node[k].v.s.acc, g);
