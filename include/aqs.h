@@ -999,7 +999,14 @@ AQS_API aqs_status aqs_linkage_set_contact_stiffness(aqs_linkage *linkage, doubl
  *  qdd += DCA^-1(Q - ID(qdd)), about one more pass over the tree's nodes,
  *  and where it is resolved (the usual case) the cycle ends there; otherwise
  *  up to 128 steps of one such pass each (a further cycle when the last one's
- *  true residual ended far above GMRES's estimate). max_corrections: 0 (off: the DCA's
+ *  true residual ended far above GMRES's estimate). On a linkage with a heavy
+ *  child (as above) the answer is then corrected by the articulated-body
+ *  factors (their pass at the same positions, their refinement started from
+ *  the DCA's answer): corrected accelerations kept where the corrections
+ *  contract to the rounding level and leave the residual at most the DCA's
+ *  or at its rounding floor; else, the refined forces where the factors'
+ *  own answer agrees with the DCA's to 64 u; not in a hand-over (docs/math.md
+ *  13a, "Corrections by the articulated-body factors"). max_corrections: 0 (off: the DCA's
  *  back-substitution as it is, the paper's exact solver) to
  *  AQS_REFINEMENT_MAX; default AQS_REFINEMENT_MAX. Any phase; takes effect
  *  at the next solve. The refinement's arrays (~2,300 B per joint with the

@@ -852,7 +852,9 @@ static aqs_status exact_solve(aqs_linkage *L, const char *fn, int32_t *path)
         s->max_computed = 0;
         adaptive_solve(L);
         cost_count(L, COST_PROCESS * (double)s->nprocessed);
+        L->handover = 1; /* no polish by the factors that lost the digits */
         refine_exact(L);
+        L->handover = 0;
         s->eps = eps;
         s->max_computed = cap;
         *path = AQS_PATH_EXACT_DCA;

@@ -305,6 +305,7 @@ typedef struct {
                          (kin_comp_world_walk) rather than refreshing stale tree poses */
     int lost;         /* the last solve's refinement stopped short of the rounding level: its
                          factors do not hold the digits (abarefine.c) */
+    int32_t fkept;    /* corrections the last refinement of the forces kept (abarefine.c) */
 } aba_state;
 
 /* The automatic choice between the adaptive and the exact path (src/solve/autopath.c). */
@@ -391,6 +392,9 @@ struct aqs_linkage {
     int32_t aba_skip;     /* exact solves left that go to the DCA without trying the articulated-body
                              solve, after one handed over (src/api/api.c, exact_solve; set to
                              AQS_HANDOVER_RUN) */
+    int handover;         /* the exact DCA solve running answers for the articulated-body solve
+                             (exact_solve): its factors lost the digits, no polish by them
+                             (src/solve/refine.c) */
     double fallback;      /* aqs_linkage_set_exact_fallback's fraction (0: off) */
     int32_t fb_left;      /* exact solves left before the adaptive solver is tried again */
     int fb_last;          /* the last solve was such an exact solve */

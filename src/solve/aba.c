@@ -37,6 +37,7 @@
 #include "dense.h"
 #include "kintree.h"
 #include "invariant.h"
+#include "rounding.h"
 #include "update.h"
 
 #ifdef __GNUC__
@@ -643,6 +644,44 @@ void aba_welded_forces(aqs_linkage *L)
         }
         dca_welded_forces_comp(L, c, x);
     }
+}
+
+int32_t aba_polish(aqs_linkage *L, const double *start, double level)
+{
+    const int32_t nu = L->t.nodes_updated, fu = L->t.factors_updated;
+    const size_t nvb = sizeof(double) * (size_t)L->nv;
+    double d = 0.0, m = 0.0;
+    int32_t kept = 0, i;
+    int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
+    if (L->aba.dirty) reset_nodes(L);
+    if (world) world_for_loads(L);
+    L->aba.world_valid = world;
+    update_loads(L);
+    L->aba.world_valid = 0;
+    cost_count_joints(L, COST_ABA_JOINT);
+    if (backward(L) != AQS_OK) {
+        L->aba.dirty = 1;
+        return -1;
+    }
+    (void)forward(L, 0); /* the factors' own answer, pA cleared for the corrections */
+    for (i = 0; i < L->nv; i++) {
+        d = fmax(d, fabs(L->qdd[i] - start[i]));
+        m = fmax(m, fabs(start[i]));
+    }
+    memcpy(L->qdd, start, nvb);
+    /* as an unbalanced solve's refinement (its forces refined too) */
+    kept = aba_refine(L, 1.0, 1);
+    if (L->aba.lost) return -1;
+    if (kept > 0 && !(aba_refine_residual(L) <= level)) return -1; /* the DCA's accelerations were better */
+    /* the accelerations as the DCA gave them: the forces of factors whose
+     * own answer agrees with them, where they corrected something */
+    if (kept == 0 && (L->aba.fkept == 0 || !(d <= ABA_POLISH_AGREE * RND_U * m))) return -1;
+    L->aba.x_valid = 1;
+    aba_welded_forces(L);
+    L->aba.x_valid = 0;
+    L->t.nodes_updated = nu;
+    L->t.factors_updated = fu;
+    return kept;
 }
 
 aqs_status aba_solve(aqs_linkage *L)

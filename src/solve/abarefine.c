@@ -204,6 +204,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
     size_t i;
     int32_t it;
     int settled;
+    L->aba.fkept = 0;
     for (it = 0; it < L->refine_max; it++) {
         if (it > 0) correction(L, R->r, R->dq, R->da);
         memcpy(R->acc0, R->acc, n6 * sizeof(ddouble));
@@ -213,6 +214,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
             memcpy(R->acc, R->acc0, n6 * sizeof(ddouble));
             break;
         }
+        L->aba.fkept++;
         settled = residual_forces_settled(R->ftry, R->fcur, n6, next / rn);
         tmp = R->fcur, R->fcur = R->ftry, R->ftry = tmp;
         rn = next;
@@ -222,6 +224,18 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
         L->aba.node[i / 6].v.s.acc[i % 6] = dd_to_double(R->acc[i]);
         L->cforce[6 * (size_t)L->aba.joint[i / 6].joint + i % 6] = R->fcur[i];
     }
+}
+
+double aba_refine_residual(aqs_linkage *L)
+{
+    struct aba_refine *R = refine_arrays(L);
+    double s = 0.0;
+    int32_t i;
+    if (!R) return NAN;
+    residual_dd_accelerations(L, L->qdd, R->acc);
+    if (!isfinite(residual_dd_eval(L, R->acc, R->f, R->r, NULL))) return NAN;
+    for (i = 0; i < L->nv; i++) s += R->r[i] * R->r[i];
+    return sqrt(s);
 }
 
 int32_t aba_refine(aqs_linkage *L, double balance, int heavy)

@@ -30,6 +30,12 @@
  * "The residual in double-double"). */
 #define ABA_REFINE_RATE 0.5
 #define ABA_REFINE_SMALL 4.0
+/* aba_polish (src/solve/aba.c) trusts the factors for the forces alone where
+ * their own answer agrees with the exact DCA's to this many u of the largest
+ * acceleration: 1.8e-16 .. 1.1e-15 where their forces were better (planar
+ * chains of 1 and 1e9 kg out of their plane), 3e-12 .. 1e-3 where they were
+ * worse (1.5 .. 10x; light planar or spherical joints holding 1e3 .. 1e9 kg). */
+#define ABA_POLISH_AGREE 64.0
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): where the balance exceeds the level, or always on a
  * linkage with a heavy child (heavy), refine the joint accelerations (at
@@ -44,6 +50,10 @@
  * (else cleared), the forces are left unrefined, and the caller answers by
  * the exact DCA (src/api/api.c, exact_solve). */
 int32_t aba_refine(aqs_linkage *L, double balance, int heavy);
+/* The double-double residual's 2-norm at the joint accelerations in L->qdd
+ * (the exact DCA's refinement's measure, src/solve/refine.c); NaN when not
+ * finite or out of memory. */
+double aba_refine_residual(aqs_linkage *L);
 /* Release the refinement's arrays (at destroy and when the model changes). */
 void aba_refine_free(aqs_linkage *L);
 
