@@ -646,21 +646,33 @@ void aba_welded_forces(aqs_linkage *L)
     }
 }
 
-int32_t aba_polish(aqs_linkage *L, const double *start, double level)
+/* The loads into the composites' frames and the backward pass (the factors
+ * IA, U, D and the bias forces), counted by the work meter. */
+static aqs_status factor(aqs_linkage *L)
 {
-    const int32_t nu = L->t.nodes_updated, fu = L->t.factors_updated;
-    const size_t nvb = sizeof(double) * (size_t)L->nv;
-    double d = 0.0, m = 0.0;
-    int32_t kept = 0, i;
+    aqs_status st;
+    /* World poses for the loads: from the sweep when the tree's are stale
+     * (the tree's take O(log N) per loaded body when current). */
     int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
     if (L->aba.dirty) reset_nodes(L);
     if (world) world_for_loads(L);
     L->aba.world_valid = world;
-    update_loads(L);
+    update_loads(L); /* the composites' loads in their frames */
     L->aba.world_valid = 0;
     cost_count_joints(L, COST_ABA_JOINT);
-    if (backward(L) != AQS_OK) {
-        L->aba.dirty = 1;
+    if ((st = backward(L)) != AQS_OK) L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
+    return st;
+}
+
+int32_t aba_polish(aqs_linkage *L, const double *start, double level)
+{
+    const size_t nvb = sizeof(double) * (size_t)L->nv;
+    char saved[sizeof L->error];
+    double d = 0.0, m = 0.0;
+    int32_t kept = 0, i;
+    memcpy(saved, L->error, sizeof saved);
+    if (factor(L) != AQS_OK) {
+        memcpy(L->error, saved, sizeof saved); /* a singular articulated inertia: not the solve's failure */
         return -1;
     }
     (void)forward(L, 0); /* the factors' own answer, pA cleared for the corrections */
@@ -679,27 +691,13 @@ int32_t aba_polish(aqs_linkage *L, const double *start, double level)
     L->aba.x_valid = 1;
     aba_welded_forces(L);
     L->aba.x_valid = 0;
-    L->t.nodes_updated = nu;
-    L->t.factors_updated = fu;
     return kept;
 }
 
 aqs_status aba_solve(aqs_linkage *L)
 {
     aqs_status st;
-    /* World poses for the loads: from the sweep when the tree's are stale
-     * (the tree's take O(log N) per loaded body when current). */
-    int world = L->loads_dirty && L->nloaded > 0 && L->t.poses_stale;
-    if (L->aba.dirty) reset_nodes(L);
-    if (world) world_for_loads(L);
-    L->aba.world_valid = world;
-    update_loads(L); /* the composites' loads in their frames */
-    L->aba.world_valid = 0;
-    cost_count_joints(L, COST_ABA_JOINT);
-    if ((st = backward(L)) != AQS_OK) {
-        L->aba.dirty = 1; /* IA / pA partly accumulated, marks left in need[] */
-        return st;
-    }
+    if ((st = factor(L)) != AQS_OK) return st;
     {
         double bal = forward(L, L->refine_max > 0);
         /* a heavy child on a light parent: the balance, formed with the

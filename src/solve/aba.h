@@ -19,19 +19,21 @@ aqs_status aba_solve(aqs_linkage *L);
  * composites with welded bodies, through dca_welded_forces_comp): after
  * aba_solve, and after a refined exact DCA solve (src/solve/refine.c). */
 void aba_welded_forces(aqs_linkage *L);
-/* The exact DCA's answer in L->qdd, of double-double residual norm rn,
- * refined by the articulated-body factors (src/solve/refine.c, on a linkage
- * with a heavy child; docs/math.md 13a, "Corrections by the articulated-body
- * factors"): the pass made at the current positions and loads, then, where
- * accel, its corrections from that answer (aba_refine), kept only where they
- * contracted to the rounding level and lowered the residual; the forces
- * (L->cforce) refined as the articulated-body solve refines them, at the
- * accelerations kept. Returns the corrections kept (0: the DCA's
- * accelerations, refined forces), or -1 where the factors cannot (a
- * singular articulated inertia, a correction that does not contract, out of
- * memory): L->qdd and L->cforce are then not the answer (the caller keeps a
- * copy). The solve's stats (nodes and factors updated) are left as they
- * were. */
+/* The exact DCA's answer (start, nv values) corrected by the articulated-body
+ * factors (src/solve/refine.c, on a linkage with a heavy child; docs/math.md
+ * 13a, "Corrections by the articulated-body factors"): the pass at the
+ * current positions and loads, then its refinement (aba_refine) started
+ * from start. Kept, in L->qdd and L->cforce: corrected accelerations where
+ * the corrections contracted to the rounding level and left the
+ * double-double residual at most level, with the forces refined at them; or
+ * start with the refined forces where no correction of the accelerations
+ * was needed, the forces' corrections lowered the bodies' residual and the
+ * pass's own answer agrees with start to ABA_POLISH_AGREE u of its largest
+ * entry. Returns the corrections of the accelerations kept (0: start), or
+ * -1 where nothing is kept (a singular articulated inertia, corrections
+ * that do not contract, factors that disagree, out of memory): L->qdd and
+ * L->cforce are then not the answer (the caller keeps a copy).
+ * aqs_linkage_last_error is left as it was. */
 int32_t aba_polish(aqs_linkage *L, const double *start, double level);
 /* The poses and inertias read from the solver's order: kintree.h. */
 
