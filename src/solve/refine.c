@@ -718,14 +718,13 @@ void refine_exact(aqs_linkage *L)
     }
     L->s.refined = akept + kept + (skept > 0 ? skept : 0);
     if (L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA && !L->handover) {
-        /* corrections by the articulated-body factors (aba_polish): the
-         * accelerations where the residual is still above the rounding floor,
-         * the forces always; the answer as it is where those factors cannot */
+        /* corrections by the articulated-body factors (aba_polish; docs/math.md
+         * 13a): the answer as it is where those factors cannot make them.
+         * Corrected accelerations are kept where their residual is at most
+         * the DCA's or at 16 rounding floors (there a lower residual does not
+         * mean a smaller error: 0.22 against 1.2, floor 2.7, where the DCA
+         * was 1.2e-13 off and the corrected answer 1.5e-16) */
         int32_t pk;
-        /* corrected accelerations are kept where their residual is at most
-         * the DCA's or at its rounding floor (there a lower residual does not
-         * mean a smaller error: 0.22 against 1.2, floor 2.7, where the
-         * DCA was 1.2e-13 off and the corrected answer 2.4e-16) */
         const double level = fmax(rn, FLOOR_FACTOR * rounding_floor(L, L->qdd));
         memcpy(R->q0, L->qdd, sizeof(double) * (size_t)nv);
         memcpy(R->df, L->cforce, 6 * sizeof(double) * (size_t)L->njoints);
