@@ -246,6 +246,7 @@ int32_t aba_refine(aqs_linkage *L, double balance, int heavy)
     int32_t kept = 0, it, i;
     const int unbalanced = balance > ABA_REFINE_LEVEL * RND_U;
     L->aba.lost = 0;
+    L->aba.fkept = 0; /* (also where the arrays cannot be allocated: aba_polish reads it) */
     if (L->refine_max <= 0 || !(unbalanced || heavy) || !isfinite(balance)) return 0;
     R = refine_arrays(L);
     if (!R) return 0; /* out of memory: the unrefined answer stands */
