@@ -34,7 +34,7 @@
  * their own answer agrees with the exact DCA's to this many u of the largest
  * acceleration: 1.8e-16 .. 1.1e-15 where their forces were better (planar
  * chains of 1 and 1e9 kg out of their plane), 3e-12 .. 1e-3 where they were
- * worse (1.5 .. 10x; light planar or spherical joints holding 1e3 .. 1e9 kg). */
+ * worse (3.3 .. 10x; light planar or spherical joints holding 1e3 .. 1e9 kg). */
 #define ABA_POLISH_AGREE 64.0
 /* After aba_solve's forward pass (L->qdd, the nodes' accelerations and
  * L->cforce set): where the balance exceeds the level, or always on a
