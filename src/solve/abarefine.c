@@ -229,13 +229,7 @@ static void refine_forces(aqs_linkage *L, struct aba_refine *R, double rn)
 double aba_refine_residual(aqs_linkage *L)
 {
     struct aba_refine *R = refine_arrays(L);
-    double s = 0.0;
-    int32_t i;
-    if (!R) return NAN;
-    residual_dd_accelerations(L, L->qdd, R->acc);
-    if (!isfinite(residual_dd_eval(L, R->acc, R->f, R->r, NULL))) return NAN;
-    for (i = 0; i < L->nv; i++) s += R->r[i] * R->r[i];
-    return sqrt(s);
+    return R ? residual_dd_norm(L, L->qdd, R->acc, R->f, R->r) : NAN;
 }
 
 int32_t aba_refine(aqs_linkage *L, double balance, int heavy)

@@ -35,15 +35,15 @@
  * node updates +36 M over 31,296, E^T E and the copies). */
 #define COST_AREFINE 5500.0
 #define COST_KEEP_FACTORS 1150.0
-/* The exact solve by the articulated-body algorithm (aba_solve), per
- * effective joint: 1,520 until 2026-12-04, +145 (callgrind, exact_main on
- * the 5,000-joint molecule) for the forward pass's balance of forces
- * (docs/math.md §5b), +40 for its measures against the joint forces and the
- * joints' own equations (1,711 -> 1,753 on the molecule, later the same day). */
-#define COST_ABA_JOINT 1700.0
-/* An exact step's move, per effective joint: joint_integrate, and
- * frames_all per joint. */
-#define COST_ABA_MOVE 40.0
+/* The exact step by the articulated-body algorithm, per effective joint:
+ * its solve (solve_body: the loads' update, aba_solve's pass and checks;
+ * counted by the work meter in aba_solve) and the rest of the step (the
+ * move: joint_integrate, the positions' update). tools/calibrate_cost.py on
+ * an exact run of the molecule, 2026-12-06 (1,532 and 110; before, 1,700
+ * and 40: the pass from aqs-bench's run plus the later additions, and the
+ * move without the positions' update, together 6 % above the step's 1,642). */
+#define COST_ABA_JOINT 1530.0
+#define COST_ABA_MOVE 110.0
 
 /* The work meter: an exact solve's passes add their cost to L->ap.work as
  * they run (cost_count), and src/api/api.c's exact_solve keeps the count of

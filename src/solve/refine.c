@@ -619,14 +619,8 @@ static int32_t state_forces(aqs_linkage *L, double *bs_err)
  * terms, hides a light link's error. Returns ||r||_2. */
 static double true_residual(aqs_linkage *L, const double *q, double *r)
 {
-    struct refine *R = L->rf;
-    double s = 0.0;
-    int32_t i;
     if (!(L->m.heavy_ratio > AQS_HEAVY_CHILD_ABA)) return residual_eval(L, q, r);
-    residual_dd_accelerations(L, q, R->sacc);
-    if (!isfinite(residual_dd_eval(L, R->sacc, R->sfw, r, NULL))) return NAN;
-    for (i = 0; i < L->nv; i++) s += r[i] * r[i];
-    return sqrt(s);
+    return residual_dd_norm(L, q, L->rf->sacc, L->rf->sfw, r);
 }
 
 void refine_exact(aqs_linkage *L)

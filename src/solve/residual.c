@@ -260,6 +260,16 @@ double residual_dd_eval(aqs_linkage *L, const ddouble *acc, ddouble *fw, double 
     return dd_eval_dekker(L, acc, fw, r, forces);
 }
 
+double residual_dd_norm(aqs_linkage *L, const double *qdd, ddouble *acc, ddouble *fw, double *r)
+{
+    double s = 0.0;
+    int32_t i;
+    residual_dd_accelerations(L, qdd, acc);
+    if (!isfinite(residual_dd_eval(L, acc, fw, r, NULL))) return NAN;
+    for (i = 0; i < L->nv; i++) s += r[i] * r[i];
+    return sqrt(s);
+}
+
 void residual_dd_acc_add(aqs_linkage *L, const double *dq, ddouble *acc)
 {
     const aba_state *a = &L->aba;

@@ -58,6 +58,10 @@ void residual_dd_select(aqs_linkage *L);
  * weighed by 1/l as in rounding.c; 0 when both are 0; NaN when a value is
  * not finite). */
 double residual_dd_eval(aqs_linkage *L, const ddouble *acc, ddouble *fw, double *r, double *forces);
+/* The 2-norm of the double-double residual r = Q - S^T f of qdd (nv
+ * values into r; acc: 6 ne ddouble scratch, fw: 6 ne): the two passes above
+ * in turn. NaN where a value is not finite. */
+double residual_dd_norm(aqs_linkage *L, const double *qdd, ddouble *acc, ddouble *fw, double *r);
 /* acc += the bodies' accelerations of dq from rest (6 per joint, the ABA
  * order), formed in double (a correction's) and added in double-double;
  * overwrites the node values' accelerations (v.s.acc). */
