@@ -616,7 +616,11 @@ static double free_joint_error(const aqs_linkage *L, int32_t n)
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted)
 {
     solve_state *s = &L->s;
-    double e = joint_error(L, n, 1);
+    double e;
+    /* the inverse-inertia form's rounding is not estimated (rounding_finish
+     * reports it unbounded): nothing to carry */
+    if (L->dca_form == AQS_DCA_FORM_PHI) return;
+    e = joint_error(L, n, 1);
     s->rk_max = maxd(s->rk_max, RN(&L->t, &L->t.nodes[n])[RND_K]);
     if (counted) {
         s->rc_sq += e * e;
@@ -630,11 +634,15 @@ void rounding_finish(aqs_linkage *L)
     solve_state *s = &L->s;
     tree *t = &L->t;
     double ru_sq = 0.0, ru_max = 0.0, kmax = s->rk_max, r2, rmax, tabs, den, tot, T, top = 0.0;
-    int valid = L->dca_form != AQS_DCA_FORM_PHI && s->rnd_ok;
+    int valid = s->rnd_ok;
     int32_t i;
     if (t->nnodes == 0) {
         s->rounding = s->rounding_rel = 0.0;
         s->certified = 1;
+        return;
+    }
+    if (L->dca_form == AQS_DCA_FORM_PHI) { /* not estimated in that form: unbounded, uncertified */
+        rounding_none(L);
         return;
     }
     if (!s->all)
