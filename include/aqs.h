@@ -478,7 +478,7 @@ AQS_API aqs_status aqs_linkage_get_exact_solver(const aqs_linkage *linkage, int3
  *  mobility is subtracted from another, so long straight chains (10^5 links
  *  and more), near point masses, light parts and large mass ratios keep
  *  their digits. AQS_DCA_FORM_PHI: Phi as an explicit matrix, joined by
- *  Phi_C = Phi_oo - M W M^T (the form of aqs up to 0.1.0): about 1.7x fewer
+ *  Phi_C = Phi_oo - M W M^T (the form of aqs up to 0.1.0): about 1.9x fewer
  *  instructions per tree node, but the subtraction loses digits as the
  *  subassemblies grow (a straight chain of 13,000 links fails with
  *  AQS_ENUMERIC) and with small or badly scaled inertias (docs/api.md,

@@ -193,27 +193,74 @@ int dense_cholesky6(const double *A, double *C)
     return 0;
 }
 
-/* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6). */
+/* V = A^{-1} = C^{-T} C^{-1} from the Cholesky factor C (6x6): Ci = C^{-1}
+ * column by column (Ci_jj = 1 / C_jj; Ci_ij = (0 - sum_{k=j}^{i-1} C_ik Ci_kj)
+ * / C_ii, the terms subtracted in k's order), then V_ij = 0 + sum_{k=i}^{5}
+ * Ci_ki Ci_kj (j <= i, added in k's order) and V_ji = V_ij. Written out,
+ * one named value per entry of Ci: the same operations in the same order as
+ * those loops (a third of their instructions; the inverse-inertia node
+ * update calls it once a node). */
 void dense_cholesky6_inverse(const double *C, double *V)
 {
-    double Ci[36];
-    int i, j, k;
-    for (i = 0; i < 36; i++) Ci[i] = 0.0;
-    for (j = 0; j < 6; j++) {
-        Ci[7 * j] = 1.0 / C[7 * j];
-        for (i = j + 1; i < 6; i++) {
-            double s = 0.0;
-            for (k = j; k < i; k++) s -= C[6 * i + k] * Ci[6 * k + j];
-            Ci[6 * i + j] = s / C[7 * i];
-        }
-    }
-    for (i = 0; i < 6; i++)
-        for (j = 0; j <= i; j++) {
-            double s = 0.0;
-            for (k = i; k < 6; k++) s += Ci[6 * k + i] * Ci[6 * k + j];
-            V[6 * i + j] = s;
-            V[6 * j + i] = s;
-        }
+    double c00, c10, c20, c30, c40, c50, c11, c21, c31, c41, c51,
+        c22, c32, c42, c52, c33, c43, c53, c44, c54, c55;
+    c00 = 1.0 / C[0];
+    c10 = (0.0 - C[6] * c00) / C[7];
+    c20 = (0.0 - C[12] * c00 - C[13] * c10) / C[14];
+    c30 = (0.0 - C[18] * c00 - C[19] * c10 - C[20] * c20) / C[21];
+    c40 = (0.0 - C[24] * c00 - C[25] * c10 - C[26] * c20 - C[27] * c30) / C[28];
+    c50 = (0.0 - C[30] * c00 - C[31] * c10 - C[32] * c20 - C[33] * c30 - C[34] * c40) / C[35];
+    c11 = 1.0 / C[7];
+    c21 = (0.0 - C[13] * c11) / C[14];
+    c31 = (0.0 - C[19] * c11 - C[20] * c21) / C[21];
+    c41 = (0.0 - C[25] * c11 - C[26] * c21 - C[27] * c31) / C[28];
+    c51 = (0.0 - C[31] * c11 - C[32] * c21 - C[33] * c31 - C[34] * c41) / C[35];
+    c22 = 1.0 / C[14];
+    c32 = (0.0 - C[20] * c22) / C[21];
+    c42 = (0.0 - C[26] * c22 - C[27] * c32) / C[28];
+    c52 = (0.0 - C[32] * c22 - C[33] * c32 - C[34] * c42) / C[35];
+    c33 = 1.0 / C[21];
+    c43 = (0.0 - C[27] * c33) / C[28];
+    c53 = (0.0 - C[33] * c33 - C[34] * c43) / C[35];
+    c44 = 1.0 / C[28];
+    c54 = (0.0 - C[34] * c44) / C[35];
+    c55 = 1.0 / C[35];
+    V[0] = 0.0 + c00 * c00 + c10 * c10 + c20 * c20 + c30 * c30 + c40 * c40 + c50 * c50;
+    V[6] = 0.0 + c11 * c10 + c21 * c20 + c31 * c30 + c41 * c40 + c51 * c50;
+    V[1] = V[6];
+    V[7] = 0.0 + c11 * c11 + c21 * c21 + c31 * c31 + c41 * c41 + c51 * c51;
+    V[12] = 0.0 + c22 * c20 + c32 * c30 + c42 * c40 + c52 * c50;
+    V[2] = V[12];
+    V[13] = 0.0 + c22 * c21 + c32 * c31 + c42 * c41 + c52 * c51;
+    V[8] = V[13];
+    V[14] = 0.0 + c22 * c22 + c32 * c32 + c42 * c42 + c52 * c52;
+    V[18] = 0.0 + c33 * c30 + c43 * c40 + c53 * c50;
+    V[3] = V[18];
+    V[19] = 0.0 + c33 * c31 + c43 * c41 + c53 * c51;
+    V[9] = V[19];
+    V[20] = 0.0 + c33 * c32 + c43 * c42 + c53 * c52;
+    V[15] = V[20];
+    V[21] = 0.0 + c33 * c33 + c43 * c43 + c53 * c53;
+    V[24] = 0.0 + c44 * c40 + c54 * c50;
+    V[4] = V[24];
+    V[25] = 0.0 + c44 * c41 + c54 * c51;
+    V[10] = V[25];
+    V[26] = 0.0 + c44 * c42 + c54 * c52;
+    V[16] = V[26];
+    V[27] = 0.0 + c44 * c43 + c54 * c53;
+    V[22] = V[27];
+    V[28] = 0.0 + c44 * c44 + c54 * c54;
+    V[30] = 0.0 + c55 * c50;
+    V[5] = V[30];
+    V[31] = 0.0 + c55 * c51;
+    V[11] = V[31];
+    V[32] = 0.0 + c55 * c52;
+    V[17] = V[32];
+    V[33] = 0.0 + c55 * c53;
+    V[23] = V[33];
+    V[34] = 0.0 + c55 * c54;
+    V[29] = V[34];
+    V[35] = 0.0 + c55 * c55;
 }
 
 void dense_cholesky6_lower_solve(const double *C, const double *b, double *w, int n)

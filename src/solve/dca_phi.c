@@ -2,7 +2,7 @@
  * node keeps its handles' articulated inverse inertia Phi as an explicit
  * matrix, and a join forms Phi_C = blkdiag(Phi^A_oo, Phi^B_oo) - M W M^T
  * (MATH.md §3). It is the form of aqs 0.1 up to 2026-12-01, kept as
- * AQS_DCA_FORM_PHI: about a third of the square-root form's cost per node,
+ * AQS_DCA_FORM_PHI: about half the square-root form's cost per node,
  * but the subtraction loses digits as subassemblies grow (a straight chain
  * of 13,000 links is "numerically singular"), and with near point masses,
  * light parts and large mass ratios (docs/math.md, "Accurate Phi"). It
@@ -14,6 +14,11 @@
 #include <string.h>
 
 #include "dense.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define PHI_SSE2 1
+#endif
 
 /* Phi is stored block-major: the 6x6 block (i, j) of an nh-handle node is
  * contiguous at 36 (nh i + j), row-major inside. */
@@ -83,6 +88,22 @@ static void lower_solve_row6(const double *Cf, const double *m, double *y)
         y[i] = v / Cf[7 * i];
     }
 }
+
+#ifdef PHI_SSE2
+/* lower_solve_row6 for two rows m0, m1 (into y0, y1), each lane its operations */
+static void lower_solve_row6_x2(const double *Cf, const double *m0, const double *m1, double *y0, double *y1)
+{
+    __m128d y[6];
+    int i, k;
+    for (i = 0; i < 6; i++) {
+        __m128d v = _mm_loadh_pd(_mm_load_sd(m0 + i), m1 + i);
+        for (k = 0; k < i; k++) v = _mm_sub_pd(v, _mm_mul_pd(_mm_set1_pd(Cf[6 * i + k]), y[k]));
+        y[i] = _mm_div_pd(v, _mm_set1_pd(Cf[7 * i]));
+        _mm_storel_pd(y0 + i, y[i]);
+        _mm_storeh_pd(y1 + i, y[i]);
+    }
+}
+#endif
 
 /* Index among a child's handles of the outer handle at position c of the
  * merged list [A-outer; B-outer]. */
@@ -200,7 +221,12 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
     {
         double *Y = t->scratch, *Z = t->scratch + 36 * nh, *ZD = Z + 6 * nh * 6;
         if (d < 6) {
-            for (ci = 0; ci < 6 * nh; ci++) lower_solve_row6(Cf, M + 6 * ci, Y + 6 * ci);
+            ci = 0;
+#ifdef PHI_SSE2
+            for (; ci + 1 < 6 * nh; ci += 2)
+                lower_solve_row6_x2(Cf, M + 6 * ci, M + 6 * ci + 6, Y + 6 * ci, Y + 6 * ci + 6);
+#endif
+            for (; ci < 6 * nh; ci++) lower_solve_row6(Cf, M + 6 * ci, Y + 6 * ci);
             if (d == 1) {
                 for (ci = 0; ci < 6 * nh; ci++) {
                     double z = 0.0;
@@ -277,7 +303,27 @@ int dca_phi_node_update(aqs_linkage *L, int32_t n)
                     Wm[6 * i + j] = x;
                 }
         }
-        for (ci = 0; ci < rows; ci++) {
+        ci = 0;
+#ifdef PHI_SSE2
+        for (; ci + 1 < rows; ci += 2) { /* two rows of M at a time, each lane the sums below */
+            const double *m0 = M + 6 * ci, *m1 = m0 + 6;
+            __m128d mj[6];
+            for (j = 0; j < 6; j++) mj[j] = _mm_loadh_pd(_mm_load_sd(m0 + j), m1 + j);
+            for (i = 0; i < 6; i++) {
+                const double *w = Wm + 6 * i;
+                __m128d x = _mm_mul_pd(_mm_set1_pd(w[0]), mj[0]);
+                for (j = 1; j < 6; j++) x = _mm_add_pd(x, _mm_mul_pd(_mm_set1_pd(w[j]), mj[j]));
+                _mm_storeu_pd(FX + (int64_t)i * rows + ci, x);
+            }
+            for (i = 0; i < d; i++) {
+                const double *u = U + 6 * i;
+                __m128d x = _mm_mul_pd(_mm_set1_pd(u[0]), mj[0]);
+                for (j = 1; j < 6; j++) x = _mm_add_pd(x, _mm_mul_pd(_mm_set1_pd(u[j]), mj[j]));
+                _mm_storeu_pd(QX + (int64_t)i * rows + ci, x);
+            }
+        }
+#endif
+        for (; ci < rows; ci++) {
             const double *m = M + 6 * ci;
             for (i = 0; i < 6; i++) {
                 const double *w = Wm + 6 * i;
