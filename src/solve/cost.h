@@ -19,7 +19,7 @@
 /* An internal node's DCA coefficients (dca_node_update), by DCA form
  * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
 #define COST_DCA_NODE_SQRT 14710.0
-#define COST_DCA_NODE_PHI 9230.0
+#define COST_DCA_NODE_PHI 8010.0
 /* An internal node's total-acceleration factor (totalacc_node_update). */
 #define COST_FACTOR 5070.0
 /* A node processed by the adaptive solve: dca_node_backsub, one
