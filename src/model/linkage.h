@@ -131,7 +131,8 @@ typedef struct {
     int32_t factors_updated; /* total-acceleration factors recomputed by the last update */
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
-                          allocated by dca_enable */
+                          then 6 + 7 max_handles for the back-substitution's sums by handle
+                          (dca_backsub_sums: qa, qq, fv); allocated by dca_enable */
     double *rnd_node;  /* RND_NODE_LEVELS (6) per node, allocated by dca_enable (src/solve/rounding.c,
                           docs/math.md "The rounding term"): relative error levels in units of u,
                           RND_K of the node's reduced factors (U, E, QX, FX), RND_KB of its b;

@@ -107,7 +107,8 @@ static int process(aqs_linkage *L, int32_t n, int32_t kids[2])
     int32_t child[2] = {nd->a, nd->b}, i, nk = 0;
     const joint_def *jd = &L->joints[L->m.eff_joint[nd->joint]];
     const int counted = jd->type != AQS_JOINT_FREE;
-    dca_node_backsub(L, n);
+    if (L->dca_form == AQS_DCA_FORM_PHI) dca_node_backsub(L, n); /* its rounding not estimated */
+    else dca_node_backsub_sums(L, n); /* the same, with the products' sums rounding_backsub reads */
     rounding_backsub(L, n, counted);
     if (worldbound_active(L)) worldbound_processed(L, n); /* children's world poses */
     s->processed[s->nprocessed++] = n;

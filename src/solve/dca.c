@@ -75,7 +75,9 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
                            "the articulated-body solver (the default exact solver) takes it",
                            fn, (int)n, m);
     }
-    if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 1, sizeof(double)))) /* src/solve/rounding.c */
+    /* src/solve/rounding.c: per handle, then the back-substitution's sums (dca_backsub_sums) */
+    if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 7 + 7 * (size_t)t->max_handles,
+                                                sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
     if (!t->rnd_node && !(t->rnd_node = lk_calloc_in(L, LK_MEM_DCA, RND_NODE_LEVELS * (size_t)t->nnodes + 1, sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
@@ -2000,9 +2002,15 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
     rank = ncol - c;
     C->jw = rank;
     if (rank > orows) {
+        /* A's outer rows are zero in B's last rB - b6 columns (Lambda_B's rest,
+         * which no constraint reflection touched), and each of their
+         * reflections keeps those zeros in every row: A's rows are reflected
+         * without them (the same results, fewer products with zeros) */
+        const int32_t endA = ncol - (rB - b6);
         for (i = 0; i < orows; i++) {
-            if (X[(int64_t)i * ncol + c + i] == 0.0) pivot_column(X, ncol, i, orows, c + i, ncol);
-            reflect_row(X, ncol, i, orows, i, c + i, ncol, v, t->avx);
+            const int32_t end = i < 6 * nAo ? endA : ncol;
+            if (X[(int64_t)i * ncol + c + i] == 0.0) pivot_column(X, ncol, i, orows, c + i, end);
+            reflect_row(X, ncol, i, orows, i, c + i, end, v, t->avx);
         }
         rank = orows;
         C->jw = jh == 0 && orows >= 6 ? 6 : rank;
@@ -2112,19 +2120,40 @@ int dca_handle_accels_mag(const aqs_linkage *L, int32_t n, double *a, double *ma
     return 0;
 }
 
+/* Node n's outputs to its children from C's handle forces x and the joint's
+ * constraint force f: A's handles but ka and B's but kb take theirs from x
+ * in order, A's ka gets -X_J^T f, B's kb gets f. */
+static inline DCA_INLINE void hand_out(aqs_linkage *L, const node *C, const double *x, const double *f)
+{
+    tree *t = &L->t;
+    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
+    const pose *J = (t->poses + nd_J(C));
+    double *xA = t->data + nd_xf(A), *xB = t->data + nd_xf(B), tmp[6];
+    int32_t nA = A->nh, nB = B->nh, i, ci;
+    for (i = 0, ci = 0; i < nA; i++) {
+        if (i == C->ka) continue;
+        memcpy(xA + 6 * i, x + 6 * ci, 6 * sizeof(double));
+        ci++;
+    }
+    spatial_xform_force_back(J, f, tmp);
+    for (i = 0; i < 6; i++) xA[6 * C->ka + i] = -tmp[i];
+    for (i = 0; i < nB; i++) {
+        if (i == C->kb) continue;
+        memcpy(xB + 6 * i, x + 6 * ci, 6 * sizeof(double));
+        ci++;
+    }
+    memcpy(xB + 6 * C->kb, f, 6 * sizeof(double));
+}
+
 void dca_node_backsub(aqs_linkage *L, int32_t n)
 {
     tree *t = &L->t;
     const node *C = &t->nodes[n];
-    const node *A = &t->nodes[C->a], *B = &t->nodes[C->b];
     const joint_def *jd = &L->joints[L->m.eff_joint[C->joint]];
     const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C);
-    const pose *J = (t->poses + nd_J(C));
     const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
-    double *xA = t->data + nd_xf(A), *xB = t->data + nd_xf(B);
     double *qdd = L->qdd + jd->voff, *f = L->cforce + 6 * L->m.eff_joint[C->joint];
-    int32_t nA = A->nh, nB = B->nh, i, k, ci, d = C->d, rows = 6 * C->nh;
-    double tmp[6];
+    int32_t i, k, d = C->d, rows = 6 * C->nh;
 
     /* qdd = rho - QX x, f = gamma + FX x (x: C's handle forces) */
     for (i = 0; i < d; i++) {
@@ -2139,20 +2168,18 @@ void dca_node_backsub(aqs_linkage *L, int32_t n)
         for (k = 0; k < rows; k++) s += fr[k] * x[k];
         f[i] = s;
     }
+    hand_out(L, C, x, f);
+}
 
-    for (i = 0, ci = 0; i < nA; i++) {
-        if (i == C->ka) continue;
-        memcpy(xA + 6 * i, x + 6 * ci, 6 * sizeof(double));
-        ci++;
-    }
-    spatial_xform_force_back(J, f, tmp);
-    for (i = 0; i < 6; i++) xA[6 * C->ka + i] = -tmp[i];
-    for (i = 0; i < nB; i++) {
-        if (i == C->kb) continue;
-        memcpy(xB + 6 * i, x + 6 * ci, 6 * sizeof(double));
-        ci++;
-    }
-    memcpy(xB + 6 * C->kb, f, 6 * sizeof(double));
+void dca_node_backsub_sums(aqs_linkage *L, int32_t n)
+{
+    tree *t = &L->t;
+    const node *C = &t->nodes[n];
+    const int32_t j = L->m.eff_joint[C->joint];
+    const double *x = t->data + nd_xf(C);
+    double *f = L->cforce + 6 * j;
+    rounding_backsub_products(L, n, x, L->qdd + L->joints[j].voff, f);
+    hand_out(L, C, x, f);
 }
 
 /* Acceleration minus g (root trick) of a composite, in its frame, from its

@@ -58,6 +58,10 @@ int dca_handle_accels_mag(const aqs_linkage *L, int32_t n, double *a, double *ma
  * acceleration and constraint force (written to L->qdd / L->cforce) and
  * the children's handle forces: qdd = rho - QX x, f = gamma + FX x. */
 void dca_node_backsub(aqs_linkage *L, int32_t n);
+/* dca_node_backsub for the square-root form's adaptive solve: the same
+ * results, each product formed once for them and for the rounding estimate's
+ * sums by handle (rounding_backsub_products, read by rounding_backsub). */
+void dca_node_backsub_sums(aqs_linkage *L, int32_t n);
 /* Constraint forces of the fixed joints inside composite c, from its leaf's
  * handle forces x (6 per handle, in the handles' frames: the DCA's are set
  * when the leaf's parent node was back-substituted). */

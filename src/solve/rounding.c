@@ -465,6 +465,77 @@ static double bside_entry_error(const aqs_linkage *L, const node *C, const doubl
     return RN(t, C)[RND_KP] * sum;
 }
 
+void rounding_backsub_products(aqs_linkage *L, int32_t n, const double *x, double *qdd, double *f)
+{
+    tree *t = &L->t;
+    double *qa = t->rnd_x + t->nhandles + 1, *qq = qa + 6, *fv = qq + t->max_handles;
+    const node *C = &t->nodes[n];
+    const double *FX = t->data + nd_W(C), *QX = t->data + nd_U(C);
+    const double *rho = t->data + nd_rho(C), *gamma = t->data + nd_gamma(C);
+    const int32_t d = C->d, nh = C->nh, rows = 6 * nh;
+    int32_t i, h, k;
+    for (h = 0; h < nh; h++) qq[h] = 0.0;
+    /* each product once: into the running sum (in k's order, as
+     * dca_node_backsub, src/solve/dca.c) and into its handle's sums (from the handle's first
+     * product, in k's order) */
+    for (i = 0; i < d; i++) {
+        const double *qr = QX + (int64_t)i * rows;
+        double s = rho[i], a = 0.0;
+        for (h = 0; h < nh; h++) {
+            const double *qh = qr + 6 * h, *xh = x + 6 * h;
+            double p = qh[0] * xh[0], q = p, b = fabs(p);
+            s -= p;
+            for (k = 1; k < 6; k++) {
+                p = qh[k] * xh[k];
+                s -= p;
+                q += p;
+                b += fabs(p);
+            }
+            a += b;
+            qq[h] += q * q;
+        }
+        qdd[i] = s;
+        qa[i] = a;
+    }
+    if (!f) return;
+    i = 0;
+#ifdef RND_SSE2
+    for (; i < 6; i += 2) { /* rows i and i + 1 in the two lanes, each as the loop below */
+        const double *fr = FX + (int64_t)i * rows, *gr = fr + rows;
+        __m128d sv = _mm_loadu_pd(gamma + i);
+        for (h = 0; h < nh; h++) {
+            const double *fh = fr + 6 * h, *gh = gr + 6 * h, *xh = x + 6 * h;
+            __m128d p = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(fh), gh), _mm_set1_pd(xh[0])), q = p;
+            sv = _mm_add_pd(sv, p);
+            for (k = 1; k < 6; k++) {
+                p = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(fh + k), gh + k), _mm_set1_pd(xh[k]));
+                sv = _mm_add_pd(sv, p);
+                q = _mm_add_pd(q, p);
+            }
+            _mm_storel_pd(fv + 6 * h + i, q);
+            _mm_storeh_pd(fv + 6 * h + i + 1, q);
+        }
+        _mm_storeu_pd(f + i, sv);
+    }
+#endif
+    for (; i < 6; i++) {
+        const double *fr = FX + (int64_t)i * rows;
+        double s = gamma[i];
+        for (h = 0; h < nh; h++) {
+            const double *fh = fr + 6 * h, *xh = x + 6 * h;
+            double p = fh[0] * xh[0], q = p;
+            s += p;
+            for (k = 1; k < 6; k++) {
+                p = fh[k] * xh[k];
+                s += p;
+                q += p;
+            }
+            fv[6 * h + i] = q;
+        }
+        f[i] = s;
+    }
+}
+
 /* The estimated error (2-norm) of node n's joint acceleration from its
  * handle forces; with set, also the children's handle-force errors. Only
  * the internal children's are set unless the world measures are active:
@@ -474,54 +545,26 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
 {
     tree *t = &L->t;
     node *C = &t->nodes[n];
-    const double *x = t->data + nd_xf(C), *FX = t->data + nd_W(C), *QX = t->data + nd_U(C), *ex = t->rnd_x + C->handles;
-    const int32_t d = C->d, rows = 6 * C->nh;
+    const double *x = t->data + nd_xf(C), *ex = t->rnd_x + C->handles;
+    const int32_t d = C->d;
     const double fu = RND_SAFETY * RND_U, ku = fu * RN(t, C)[RND_K], il = inv_length(L);
+    const double *qa = t->rnd_x + t->nhandles + 1, *qq = qa + 6, *fv = qq + t->max_handles;
     double sq = 0.0, qe = 0.0, xns[AQS_JE_MAXH];
     int32_t h, i;
     /* qdd_i = rho_i - sum_k QX_ik x_k: the products' magnitudes (rounding and
      * QX's error), and each handle's relative error carried by its share
-     * QX_h x_h */
-    {
-        double a[6] = {0, 0, 0, 0, 0, 0}, q[6];
-        for (h = 0; h < C->nh; h++) {
-            const double *xh = x + 6 * h;
-            const double xn = n6f(xh, il), w = xn > 0.0 ? ex[h] / xn : 0.0;
-            double qq = 0.0;
-            if (h < AQS_JE_MAXH) xns[h] = xn;
-#ifdef RND_SSE2
-            { /* the six products two at a time, the sums in the scalar order */
-                const __m128d ab = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL)); /* fabs */
-                const __m128d x01 = _mm_loadu_pd(xh), x23 = _mm_loadu_pd(xh + 2), x45 = _mm_loadu_pd(xh + 4);
-                for (i = 0; i < d; i++) {
-                    const double *qr = QX + (int64_t)i * rows + 6 * h;
-                    const __m128d p01 = _mm_mul_pd(_mm_loadu_pd(qr), x01), p23 = _mm_mul_pd(_mm_loadu_pd(qr + 2), x23),
-                                  p45 = _mm_mul_pd(_mm_loadu_pd(qr + 4), x45);
-                    const __m128d b01 = _mm_and_pd(p01, ab), b23 = _mm_and_pd(p23, ab), b45 = _mm_and_pd(p45, ab);
-                    __m128d sa = _mm_add_sd(b01, _mm_unpackhi_pd(b01, b01)), sq6 = _mm_add_sd(p01, _mm_unpackhi_pd(p01, p01));
-                    sa = _mm_add_sd(_mm_add_sd(sa, b23), _mm_unpackhi_pd(b23, b23));
-                    sa = _mm_add_sd(_mm_add_sd(sa, b45), _mm_unpackhi_pd(b45, b45));
-                    sq6 = _mm_add_sd(_mm_add_sd(sq6, p23), _mm_unpackhi_pd(p23, p23));
-                    sq6 = _mm_add_sd(_mm_add_sd(sq6, p45), _mm_unpackhi_pd(p45, p45));
-                    a[i] += _mm_cvtsd_f64(sa);
-                    q[i] = _mm_cvtsd_f64(sq6);
-                    qq += q[i] * q[i];
-                }
-            }
-#else
-            for (i = 0; i < d; i++) {
-                const double *qr = QX + (int64_t)i * rows + 6 * h;
-                const double p0 = qr[0] * xh[0], p1 = qr[1] * xh[1], p2 = qr[2] * xh[2], p3 = qr[3] * xh[3],
-                             p4 = qr[4] * xh[4], p5 = qr[5] * xh[5];
-                a[i] += fabs(p0) + fabs(p1) + fabs(p2) + fabs(p3) + fabs(p4) + fabs(p5);
-                q[i] = p0 + p1 + p2 + p3 + p4 + p5;
-                qq += q[i] * q[i];
-            }
-#endif
-            qe += w * sqrtn(qq);
-        }
-        for (i = 0; i < d; i++) sq += a[i] * a[i];
+     * QX_h x_h. With set, the back-substitution (dca_node_backsub_sums) has
+     * put the sums by handle there (and FX_h x_h's); else they are summed here. */
+    if (!set) {
+        double qdd[6];
+        rounding_backsub_products(L, n, x, qdd, NULL);
     }
+    for (h = 0; h < C->nh; h++) {
+        const double xn = n6f(x + 6 * h, il), w = xn > 0.0 ? ex[h] / xn : 0.0;
+        if (h < AQS_JE_MAXH) xns[h] = xn;
+        qe += w * sqrtn(qq[h]);
+    }
+    for (i = 0; i < d; i++) sq += qa[i] * qa[i];
     if (set) {
         /* f = gamma + FX x: each handle force's relative error carried by its
          * share FX_h x_h, plus the rounding; the children's handle k gets f
@@ -540,14 +583,9 @@ static double joint_error(aqs_linkage *L, int32_t n, int set)
             for (h = 0; h < C->nh; h++) {
                 const int32_t o = 6 * h;
                 const double xn = h < AQS_JE_MAXH ? xns[h] : n6f(x + o, il);
-                double v[6], vn;
+                double vn;
                 if (xn == 0.0) continue;
-                for (i = 0; i < 6; i++) {
-                    const double *fr = FX + (int64_t)i * rows + o;
-                    v[i] = fr[0] * x[o] + fr[1] * x[o + 1] + fr[2] * x[o + 2] + fr[3] * x[o + 3] + fr[4] * x[o + 4] +
-                           fr[5] * x[o + 5];
-                }
-                vn = n6f(v, il);
+                vn = n6f(fv + o, il);
                 ef += ex[h] / xn * vn;
                 sf += vn;
             }

@@ -32,9 +32,17 @@ void rounding_node(aqs_linkage *L, int32_t n, const double *U, const double *G2,
 /* Before a solve's back-substitution: the root's handle forces are exact,
  * the per-solve sums zero. */
 void rounding_solve_start(aqs_linkage *L);
-/* After dca_node_backsub(L, n): the estimated absolute error (2-norm) of
- * the joint's acceleration, and the children's handle-force errors. Adds it
- * to the solve's sums unless the joint is free. */
+/* The back-substitution's products for node n and handle forces x (6 nh):
+ * qdd = rho - QX x and, when f is not NULL, f = gamma + FX x, summed as
+ * dca_node_backsub sums them, and the same products summed by handle h (each
+ * from its first product, in column order) for joint_error, in the scratch
+ * after tree.rnd_x's handles: sum_h sum_{k in h} |QX_ik x_k| (i < d),
+ * sum_i (sum_{k in h} QX_ik x_k)^2 and, with f, sum_{k in h} FX_ik x_k. */
+void rounding_backsub_products(aqs_linkage *L, int32_t n, const double *x, double *qdd, double *f);
+/* After dca_node_backsub_sums(L, n) (its sums by handle; the inverse-inertia
+ * form's dca_node_backsub: nothing estimated): the estimated absolute error
+ * (2-norm) of the joint's acceleration, and the children's handle-force
+ * errors. Adds it to the solve's sums unless the joint is free. */
 void rounding_backsub(aqs_linkage *L, int32_t n, int counted);
 /* After a solve or refine: the queued nodes' uncomputed joints, then
  * L->s.rounding and L->s.certified for the measure in force. */
