@@ -2052,8 +2052,24 @@ void dca_mw_apply(const aqs_linkage *L, int32_t n, const double g[6], double *ou
     const node *C = &t->nodes[n];
     const double *FX = t->data + nd_W(C);
     const int32_t rows = 6 * C->nh;
-    int32_t i;
-    for (i = 0; i < rows; i++)
+    int32_t i = 0;
+#ifdef DCA_SSE2
+    { /* entries i and i + 1 (adjacent in each row of FX) in the two lanes, each sum as below */
+        const __m128d g0 = _mm_set1_pd(g[0]), g1 = _mm_set1_pd(g[1]), g2 = _mm_set1_pd(g[2]), g3 = _mm_set1_pd(g[3]),
+                      g4 = _mm_set1_pd(g[4]), g5 = _mm_set1_pd(g[5]);
+        for (; i + 1 < rows; i += 2) {
+            const double *f = FX + i;
+            __m128d x = _mm_mul_pd(_mm_loadu_pd(f), g0);
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(f + rows), g1));
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(f + 2 * rows), g2));
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(f + 3 * rows), g3));
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(f + 4 * rows), g4));
+            x = _mm_add_pd(x, _mm_mul_pd(_mm_loadu_pd(f + 5 * rows), g5));
+            _mm_storeu_pd(out + i, x);
+        }
+    }
+#endif
+    for (; i < rows; i++)
         out[i] = FX[i] * g[0] + FX[rows + i] * g[1] + FX[2 * rows + i] * g[2] + FX[3 * rows + i] * g[3] +
                  FX[4 * rows + i] * g[4] + FX[5 * rows + i] * g[5];
 }
