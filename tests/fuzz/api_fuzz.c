@@ -1,7 +1,8 @@
 /* api_fuzz.c -- libFuzzer target: "a failed call changes nothing observable"
  * (aqs.h) on arbitrary call sequences with injected allocation failures.
  *
- * The input bytes decode into a sequence of API calls (bodies, joints,
+ * The input bytes decode into a DCA form (AQS_DCA_FORM_SQRT or _PHI, for
+ * both linkages) and a sequence of API calls (bodies, joints,
  * finalize, positions, loads, settings, solve, step, refine, shapes,
  * filters, queries) made on two linkages: the subject, whose allocator fails
  * on the allocations the input chooses, and the twin (plain malloc), which
@@ -352,12 +353,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     injector inj = {0, 0, 0, 0};
     aqs_linkage *S = NULL, *T = NULL;
     long step = 0;
-    int32_t nb0 = 1 + (int32_t)pick(&in, MAXB), k;
+    /* the first byte: the start's size, and in its otherwise unused part the
+       DCA form (both linkages; set before building, the only time it can be:
+       the seeds under tests/fuzz/seeds keep the default square-root form) */
+    const unsigned b0 = byte(&in);
+    const int32_t form = (b0 / MAXB) % 2 ? AQS_DCA_FORM_PHI : AQS_DCA_FORM_SQRT;
+    int32_t nb0 = 1 + (int32_t)(b0 % MAXB), k;
     if (aqs_linkage_create_with_allocator(inj_alloc, inj_free, &inj, &S) != AQS_OK) return 0;
     if (aqs_linkage_create(&T) != AQS_OK) {
         aqs_linkage_destroy(S);
         return 0;
     }
+    if (aqs_linkage_set_dca_form(S, form) != AQS_OK || aqs_linkage_set_dca_form(T, form) != AQS_OK) abort();
     /* A valid start most inputs share: a tree of nb0 bodies (the first byte),
      * each joint's type and parent from one byte, then finalize. */
     for (k = 0; k < 2 * nb0 + 1; k++) {
