@@ -105,7 +105,9 @@ def main():
     c["COST_FACTOR"] = per_call(incl, calls, "totalacc_node_update")
     # a processed node: its back-substitution, one evaluation of A, one heap
     # push and pop
-    c["COST_PROCESS"] = (per_call(incl, calls, "dca_node_backsub") + per_call(incl, calls, "totalacc_eval") +
+    # (dca_node_backsub_sums: the adaptive solve's back-substitution in the
+    # square-root form, its products shared with the rounding estimate)
+    c["COST_PROCESS"] = (per_call(incl, calls, "dca_node_backsub_sums") + per_call(incl, calls, "totalacc_eval") +
                          per_call(incl, calls, "heap_push") + per_call(incl, calls, "heap_pop"))
     # a moved node: its joint integrated, its frames
     c["COST_MOVE"] = per_call(incl, calls, "joint_integrate") + per_call(incl, calls, "frames_node")
@@ -130,7 +132,7 @@ def main():
     c["COST_DD_RESIDUAL"] = per_call(hi, hc, "residual_dd_eval") / ne
     c["COST_DD_ACCEL"] = per_call(hi, hc, "residual_dd_accelerations") / ne
     c["COST_RESIDUAL"] = per_call(di, dc, "residual_eval") / ne
-    c["COST_BACKSUB"] = per_call(incl, calls, "dca_node_backsub")
+    c["COST_BACKSUB"] = per_call(di, dc, "dca_node_backsub")  # the refinement's passes (refine.c)
     c["COST_NODE_LOADS"] = per_call(di, dc, "dca_node_loads")
     print("/* tools/calibrate_cost.py --joints %d --steps %d */" % (a.joints, a.steps))
     for k, v in c.items():

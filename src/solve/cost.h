@@ -20,10 +20,12 @@
  * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
 #define COST_DCA_NODE_SQRT 14710.0
 #define COST_DCA_NODE_PHI 8010.0
-/* An internal node's total-acceleration factor (totalacc_node_update). */
-#define COST_FACTOR 5070.0
-/* A node processed by the adaptive solve: dca_node_backsub, one
- * totalacc_eval, one heap_push and heap_pop. */
+/* An internal node's total-acceleration factor (totalacc_node_update;
+ * 5,070 before dca_mw_apply's SSE2 lanes, 2026-12-06). */
+#define COST_FACTOR 4850.0
+/* A node processed by the adaptive solve: its back-substitution
+ * (dca_node_backsub_sums in the square-root form), one totalacc_eval, one
+ * heap_push and heap_pop (tools/calibrate_cost.py: 1,280, 2026-12-06). */
 #define COST_PROCESS 1260.0
 /* A node moved by an adaptive step: joint_integrate, frames_node. */
 #define COST_MOVE 490.0
@@ -68,12 +70,14 @@
  *   residual_balance; residual_accelerations alone counts half);
  *   per node: the exact DCA refinement's correction (refine.c: each internal
  *   node's update, COST_DCA_NODE_*, or its loads, COST_NODE_LOADS, and its
- *   back-substitution, COST_BACKSUB). */
+ *   back-substitution, COST_BACKSUB: dca_node_backsub per call in the exact
+ *   DCA's refinement, 630 since 2026-12-06; 730 before, measured on the
+ *   adaptive steps, whose back-substitution is now dca_node_backsub_sums). */
 #define COST_ABA_CORRECTION 510.0
 #define COST_DD_RESIDUAL 1390.0
 #define COST_DD_ACCEL 450.0
 #define COST_RESIDUAL 300.0
-#define COST_BACKSUB 730.0
+#define COST_BACKSUB 630.0
 #define COST_NODE_LOADS 900.0
 
 static inline void cost_count(aqs_linkage *L, double instructions) { L->ap.work += instructions; }
