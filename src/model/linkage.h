@@ -132,7 +132,7 @@ typedef struct {
     double *rnd_x;     /* nhandles, at each node's handles offset: the estimated absolute error
                           of its handle forces (src/solve/rounding.c), set by the back-substitution;
                           then 6 + 7 max_handles for the back-substitution's sums by handle
-                          (dca_backsub_sums: qa, qq, fv); allocated by dca_enable */
+                          (rounding_backsub_products); allocated by dca_enable */
     double *rnd_node;  /* RND_NODE_LEVELS (6) per node, allocated by dca_enable (src/solve/rounding.c,
                           docs/math.md "The rounding term"): relative error levels in units of u,
                           RND_K of the node's reduced factors (U, E, QX, FX), RND_KB of its b;

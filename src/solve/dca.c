@@ -75,7 +75,7 @@ aqs_status dca_enable(aqs_linkage *L, const char *fn)
                            "the articulated-body solver (the default exact solver) takes it",
                            fn, (int)n, m);
     }
-    /* src/solve/rounding.c: per handle, then the back-substitution's sums (dca_backsub_sums) */
+    /* src/solve/rounding.c: per handle, then the back-substitution's sums by handle (rounding_backsub_products) */
     if (!t->rnd_x && !(t->rnd_x = lk_calloc_in(L, LK_MEM_DCA, (size_t)t->nhandles + 7 + 7 * (size_t)t->max_handles,
                                                 sizeof(double))))
         return lk_fail(L, AQS_ENOMEM, "%s: out of memory for the rounding estimate", fn);
