@@ -447,6 +447,89 @@ static void test_collision_allocation_fails(void **state)
     }
 }
 
+/* A 12-body branched linkage with tilted axes under gravity and a force,
+ * penalty contact on, finalized and stepped once (exact solves: the tree's
+ * poses neither allocated nor fresh). */
+static aqs_linkage *first_shape_linkage(counting_state *cs)
+{
+    aqs_linkage *L = test_new_linkage_in(cs);
+    const double g[3] = {0.3, -9.81, 0.7}, f[3] = {1.5, -0.4, 2.0}, at[3] = {0.2, 0.1, 0};
+    uint64_t seed = 7;
+    int32_t i;
+    for (i = 0; i < 12; i++) {
+        const int32_t parent = i == 0 ? AQS_WORLD : (int32_t)test_uniform(&seed, i > 3 ? i - 3 : 0, i);
+        const double pos[3] = {0.6, 0.1, 0.05 * i}, axis[3] = {test_uniform(&seed, -1, 1), test_uniform(&seed, -1, 1), 1.0};
+        double q[4];
+        test_random_quat(&seed, q);
+        test_add_body(L, 0.5 + test_uniform(&seed, 0, 2), 0.3, 0.05, 0, 0.05 + test_uniform(&seed, 0, 0.1));
+        assert_int_equal(aqs_joint_add(L, i % 3 == 1 ? AQS_JOINT_SPHERICAL : AQS_JOINT_REVOLUTE, parent, i, pos, q,
+                                       axis, NULL),
+                         AQS_OK);
+    }
+    assert_int_equal(aqs_linkage_finalize(L), AQS_OK);
+    assert_int_equal(aqs_linkage_set_gravity(L, g), AQS_OK);
+    for (i = 0; i < 12; i++) assert_int_equal(aqs_body_set_force(L, i, f, at, NULL), AQS_OK);
+    assert_int_equal(aqs_linkage_set_contact_stiffness(L, 50.0), AQS_OK);
+    assert_int_equal(aqs_linkage_step(L, 0.01), AQS_OK);
+    return L;
+}
+
+/* The first shape added with penalty contact on builds the broad phase at
+ * once, and refreshes (allocating, the first time) the tree's poses before.
+ * When that fails for memory, later solves must give the bits of a linkage
+ * that never tried it: with the poses left fresh, a load's world pose came
+ * from the tree's poses instead of the kinematic walk, one ulp apart (found
+ * by the fuzzer, 2026-12-06: tests/fuzz/seeds/first-shape-oom-poses). For each
+ * allocation of the call: fail it, move a joint, step twice, compare. */
+static void test_failed_first_shape_changes_nothing(void **state)
+{
+    const double r[3] = {0.2, 0, 0}, at[3] = {0.1, 0, 0}, quat[4] = {1, 0, 0, 0}, q1[1] = {0.3};
+    long k;
+    int failed = 0;
+    (void)state;
+    for (k = 1;; k++) {
+        counting_state cs, ct;
+        aqs_linkage *S, *T;
+        aqs_status st;
+        double qs[64], qt[64], as[64], at2[64];
+        int i;
+        memset(&cs, 0, sizeof cs);
+        memset(&ct, 0, sizeof ct);
+        S = first_shape_linkage(&cs);
+        T = first_shape_linkage(&ct);
+        cs.fail_at = cs.count + k;
+        st = aqs_shape_add(S, 4, AQS_SHAPE_SPHERE, r, at, quat, NULL);
+        cs.fail_at = 0;
+        if (st == AQS_OK) { /* past the call's allocations */
+            aqs_linkage_destroy(S);
+            aqs_linkage_destroy(T);
+            break;
+        }
+        assert_int_equal(st, AQS_ENOMEM);
+        failed++;
+        assert_int_equal(aqs_joint_set_position(S, 2, q1, 1), AQS_OK);
+        assert_int_equal(aqs_joint_set_position(T, 2, q1, 1), AQS_OK);
+        for (i = 0; i < 2; i++) {
+            assert_int_equal(aqs_linkage_step(S, 0.01), AQS_OK);
+            assert_int_equal(aqs_linkage_step(T, 0.01), AQS_OK);
+        }
+        memset(qs, 0, sizeof qs);
+        memset(qt, 0, sizeof qt);
+        memset(as, 0, sizeof as);
+        memset(at2, 0, sizeof at2);
+        assert_int_equal(aqs_linkage_get_positions(S, qs, 64), AQS_OK);
+        assert_int_equal(aqs_linkage_get_positions(T, qt, 64), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(S, as, 64), AQS_OK);
+        assert_int_equal(aqs_linkage_get_accelerations(T, at2, 64), AQS_OK);
+        assert_memory_equal(qs, qt, sizeof qs);
+        assert_memory_equal(as, at2, sizeof as);
+        aqs_linkage_destroy(S);
+        aqs_linkage_destroy(T);
+        assert_int_equal(cs.live, 0);
+    }
+    assert_true(failed >= 2); /* the poses' allocation and the broad phase's among them */
+}
+
 /* A scene without shapes pays nothing: no collision state, no allocation by
  * steps or queries. */
 static void test_shapeless_scene_allocates_nothing(void **state)
@@ -489,6 +572,7 @@ int main(void)
         cmocka_unit_test(test_every_allocation_fails),
         cmocka_unit_test(test_tolerance_allocation_fails),
         cmocka_unit_test(test_collision_allocation_fails),
+        cmocka_unit_test(test_failed_first_shape_changes_nothing),
         cmocka_unit_test(test_shapeless_scene_allocates_nothing),
     };
     return cmocka_run_group_tests_name("alloc", tests, NULL, NULL);

@@ -76,18 +76,35 @@ static aqs_status check_placement(aqs_linkage *L, const char *fn, const double p
     return AQS_OK;
 }
 
+/* A failed first shape leaves the tree's poses as they were: refreshed or
+ * allocated by it, they would change the path later solves take to the
+ * bodies' world poses (frames_comp_world walks the kinematic tree while the
+ * tree's poses are stale or absent), and so their last bits. */
+static aqs_status first_shape_failed(aqs_linkage *L, int had_poses, int was_stale, aqs_status st)
+{
+    if (!had_poses && L->t.poses) {
+        lk_free(L, L->t.poses);
+        L->t.poses = NULL;
+    }
+    if (was_stale) stale_poses(L);
+    return st;
+}
+
 /* Append a validated shape (pts already copied, owned on success). */
 static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s, int32_t *out)
 {
     collision *c = collide_state(L);
+    const int had_poses = L->t.poses != NULL, was_stale = L->t.poses_stale;
+    int first;
     if (!c) return oom(L, fn);
+    first = c->nshapes == 0;
     /* the first shape: from now on the tree's poses follow every move (a
      * linkage with filters and no shape holds no poses for them) */
-    if (c->nshapes == 0 && frames_poses(L) != AQS_OK) return oom(L, fn);
+    if (first && frames_poses(L) != AQS_OK) return first_shape_failed(L, had_poses, was_stale, oom(L, fn));
     if (c->nshapes == c->shape_cap) {
         int32_t cap = c->shape_cap ? 2 * c->shape_cap : 8;
         shape_def *grown = lk_alloc_in(L, LK_MEM_COLLISION, (size_t)cap * sizeof(shape_def));
-        if (!grown) return oom(L, fn);
+        if (!grown) return first ? first_shape_failed(L, had_poses, was_stale, oom(L, fn)) : oom(L, fn);
         if (c->nshapes) memcpy(grown, c->shapes, (size_t)c->nshapes * sizeof(shape_def));
         lk_free(L, c->shapes);
         c->shapes = grown;
@@ -99,7 +116,7 @@ static aqs_status push_shape(aqs_linkage *L, const char *fn, const shape_def *s,
         /* penalty contact: build now, so that solving never allocates; a
            failure keeps the former shapes' data, which solving needs */
         aqs_status st = broadphase_rebuild(L, c->nshapes + 1, fn);
-        if (st != AQS_OK) return st;
+        if (st != AQS_OK) return first ? first_shape_failed(L, had_poses, was_stale, st) : st;
         stale_loads(L);
     } else {
         c->nshapes++;
