@@ -17,8 +17,9 @@
 #include "linkage.h"
 
 /* An internal node's DCA coefficients (dca_node_update), by DCA form
- * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI). */
-#define COST_DCA_NODE_SQRT 14710.0
+ * (AQS_DCA_FORM_SQRT, the default, and AQS_DCA_FORM_PHI; the square-root
+ * node 14,710 before its empty row copies were skipped, 2026-12-06). */
+#define COST_DCA_NODE_SQRT 14340.0
 #define COST_DCA_NODE_PHI 8010.0
 /* An internal node's total-acceleration factor (totalacc_node_update;
  * 5,070 before dca_mw_apply's SSE2 lanes, 2026-12-06). */

@@ -1831,7 +1831,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
      * written below, the other side's columns of the outer rows as zeros; the
      * constraint and relative rows are read only in their first w columns) */
     for (ci = 0; ci < nh; ci++) xform_cols(&PF[ci], ci < nAo ? ZA : ZB, X + (int64_t)6 * ci * ncol, ncol, t->avx);
-    /* The children's outer rows, each in its own columns. */
+    /* The children's outer rows, each in its own columns (a piece that is empty, a rigid
+     * side's or a factor's rest past its join block, is skipped: a memcpy of no bytes still
+     * costs its call, 2 % of an adaptive step). */
     for (i = 0, ci = 0; i < nA; i++) {
         const double *la;
         double *m;
@@ -1840,9 +1842,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         m = X + (int64_t)6 * ci * ncol;
         for (r = 0; r < 6; r++) {
             double *mr = m + (int64_t)r * ncol;
-            memcpy(mr + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
+            if (a6 > 0) memcpy(mr + 6, la + (int64_t)r * ldA, sizeof(double) * (size_t)a6);
             for (j = 6 + a6; j < w; j++) mr[j] = 0.0;
-            memcpy(mr + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
+            if (rA > a6) memcpy(mr + w, la + (int64_t)r * ldA + a6, sizeof(double) * (size_t)(rA - a6));
             for (j = w + rA - a6; j < ncol; j++) mr[j] = 0.0;
         }
         ci++;
@@ -1856,9 +1858,9 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         for (r = 0; r < 6; r++) {
             double *mr = m + (int64_t)r * ncol;
             for (j = 6; j < 6 + a6; j++) mr[j] = 0.0;
-            memcpy(mr + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
+            if (b6 > 0) memcpy(mr + 6 + a6, lb + (int64_t)r * ldB, sizeof(double) * (size_t)b6);
             for (j = w; j < w + rA - a6; j++) mr[j] = 0.0;
-            memcpy(mr + w + rA - a6, lb + (int64_t)r * ldB + b6, sizeof(double) * (size_t)(rB - b6));
+            if (rB > b6) memcpy(mr + w + rA - a6, lb + (int64_t)r * ldB + b6, sizeof(double) * (size_t)(rB - b6));
         }
         ci++;
     }
@@ -1880,7 +1882,7 @@ static int hybrid_phi(aqs_linkage *L, int32_t n, const double *S, int32_t d, con
         for (r = 0; r < 6; r++) rel[ncol * r + 6 + j] = -o[r];
     }
     for (r = 0; r < 6; r++)
-        memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * C->kb + r) * ldB, sizeof(double) * (size_t)b6);
+        if (b6 > 0) memcpy(rel + ncol * r + 6 + a6, LB + (int64_t)(6 * C->kb + r) * ldB, sizeof(double) * (size_t)b6);
     /* Sd = S (S^T S)^-1 */
     {
         double StS[36], StSi[36];
